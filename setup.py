@@ -1,0 +1,40 @@
+import os
+from glob import glob
+
+from setuptools import find_packages, setup
+
+package_name = 'gpusph_ros'
+
+
+def config_files():
+    """Every file under config/, installed to share/gpusph_ros/config keeping sub-folders."""
+    entries = {}
+    for path in glob('config/**/*', recursive=True):
+        if os.path.isfile(path):
+            target = os.path.join('share', package_name, os.path.dirname(path))
+            entries.setdefault(target, []).append(path)
+    return sorted(entries.items())
+
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['tests', 'tests.*', 'bench']),
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+        *config_files(),
+    ],
+    install_requires=['setuptools'],
+    zip_safe=True,
+    maintainer='gpusph_ros maintainers',
+    maintainer_email='maintainers@gpusph-ros.dev',
+    description='Weakly-compressible SPH free-surface flow solver on NVIDIA Warp, wrapped as a ROS 2 node.',
+    license='BSD-3-Clause',
+    tests_require=['pytest'],
+    entry_points={
+        'console_scripts': [
+            'sim_node = gpusph_ros.ros.sim_node:main',
+        ],
+    },
+)
