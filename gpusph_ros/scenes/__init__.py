@@ -1,0 +1,1 @@
+"""Scene description: geometry to particles, and the built-in cases."""

@@ -1,0 +1,106 @@
+"""Box geometry to particles: lattice fill, walls of boundary particles or planes, tanks.
+
+Conventions: the vertical axis is the last one of the dimension (y in 2D, z in 3D); the tank
+floor is at 0 on that axis; a tank is open at the top. Fluid particles sit at the centres of a
+cubic lattice of spacing dx, so the first layer lies dx/2 from a wall and the top layer dx/2
+below the stated surface. Boundary particles continue that lattice outside the walls.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..sph.config import Plane, SolverConfig
+from ..sph.eos import hydrostatic_density
+from ..sph.solver import BOUNDARY, FLUID, Particles
+
+
+def lattice(lo, hi, dx: float, dim: int) -> np.ndarray:
+    """Cell centres of a lattice of spacing dx filling the box [lo, hi] (z = 0 in 2D)."""
+    axes = []
+    for ax in range(dim):
+        count = int(round((hi[ax] - lo[ax]) / dx))
+        axes.append(lo[ax] + (np.arange(count) + 0.5) * dx)
+    grids = np.meshgrid(*axes, indexing="ij")
+    pts = np.zeros((grids[0].size, 3))
+    for ax in range(dim):
+        pts[:, ax] = grids[ax].ravel()
+    return pts
+
+
+def wall_particles(hi, dx: float, dim: int, layers: int) -> np.ndarray:
+    """``layers`` layers of lattice points outside the walls of the open-top tank [0, hi]."""
+    pad = layers * dx
+    lo_out = [-pad] * dim
+    hi_out = [hi[ax] + pad for ax in range(dim - 1)] + [hi[dim - 1]]
+    pts = lattice(lo_out, hi_out, dx, dim)
+    inside = np.ones(len(pts), dtype=bool)
+    for ax in range(dim):
+        inside &= (pts[:, ax] > 0.0) & (pts[:, ax] < hi[ax])
+    return pts[~inside]
+
+
+def tank_planes(hi, dim: int) -> list:
+    """The floor and side walls of the open-top tank [0, hi] as planes with inward normals."""
+    planes = []
+    for ax in range(dim):
+        normal = [0.0, 0.0, 0.0]
+        normal[ax] = 1.0
+        planes.append(Plane(point=(0.0, 0.0, 0.0), normal=tuple(normal)))
+        if ax != dim - 1:
+            normal = [0.0, 0.0, 0.0]
+            normal[ax] = -1.0
+            point = [0.0, 0.0, 0.0]
+            point[ax] = hi[ax]
+            planes.append(Plane(point=tuple(point), normal=tuple(normal)))
+    return planes
+
+
+def boundary_layers(boundary: str, hdx: float) -> int:
+    """Dynamic boundaries need a full kernel support of particles; force-based ones one layer."""
+    return int(np.ceil(2.0 * hdx)) if boundary == "dynamic" else 1
+
+
+def box_tank(cfg: SolverConfig, tank, fluid_boxes, walls: str = "particles", headroom: float = 0.5):
+    """Particles and configuration for fluid boxes at rest in an open-top tank [0, tank].
+
+    ``fluid_boxes`` is a list of (lo, hi) boxes; each starts hydrostatic under its own top.
+    ``walls`` is "particles" (the configured boundary model) or "planes". Returns the config
+    with domain and planes filled in, and the particle set.
+    """
+    dim, dx = cfg.dim, cfg.dx
+    up = dim - 1
+    g = cfg.g_norm
+    fluid, rho = [], []
+    for lo, hi in fluid_boxes:
+        pts = lattice(lo, hi, dx, dim)
+        fluid.append(pts)
+        rho.append(hydrostatic_density(hi[up] - pts[:, up], cfg.rho0, cfg.eos_b, cfg.gamma, g))
+    fluid = np.concatenate(fluid)
+    rho = np.concatenate(rho)
+    layers = 0
+    planes = []
+    if walls == "particles":
+        layers = boundary_layers(cfg.boundary, cfg.hdx)
+        wall = wall_particles(tank, dx, dim, layers)
+        surface = max(hi[up] for _, hi in fluid_boxes)
+        wall_rho = hydrostatic_density(surface - wall[:, up], cfg.rho0, cfg.eos_b, cfg.gamma, g)
+    elif walls == "planes":
+        planes = tank_planes(tank, dim)
+        wall = np.zeros((0, 3))
+        wall_rho = np.zeros(0)
+    else:
+        raise ValueError(f"walls: {walls!r} is not one of particles, planes")
+    pad = (layers + 1) * dx
+    lo = [-pad if ax < dim else -1.0 for ax in range(3)]
+    hi = [tank[ax] + pad if ax < dim else 1.0 for ax in range(3)]
+    hi[up] = tank[up] * (1.0 + headroom) + pad
+    cfg = cfg.replace(domain_lo=tuple(lo), domain_hi=tuple(hi), planes=planes)
+    n_f, n_w = len(fluid), len(wall)
+    particles = Particles(
+        pos=np.concatenate([fluid, wall]),
+        vel=np.zeros((n_f + n_w, 3)),
+        rho=np.concatenate([rho, wall_rho]),
+        mass=np.full(n_f + n_w, cfg.rho0 * dx ** dim),
+        ptype=np.concatenate([np.full(n_f, FLUID), np.full(n_w, BOUNDARY)]),
+    )
+    return cfg, particles

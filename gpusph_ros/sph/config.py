@@ -1,0 +1,162 @@
+"""Run configuration of the SPH solver: every numerical choice the thesis varies, by name.
+
+A configuration is plain data. ``SolverConfig.validate`` checks every field and raises
+``ConfigError`` naming the field, the value and what is allowed, so that a scene file, a CLI
+override or a ROS parameter all get the same message.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+KERNELS = ("quadratic", "cubic_spline", "wendland")
+VISCOSITIES = ("artificial", "laminar", "sps")
+BOUNDARIES = ("lennard_jones", "monaghan_kajtar", "dynamic")
+DENSITY_DIFFUSIONS = ("none", "delta")
+PRECISIONS = ("float32", "float64")
+
+
+class ConfigError(ValueError):
+    """A configuration field has a value the solver cannot use."""
+
+    def __init__(self, field_name: str, value, allowed: str):
+        self.field = field_name
+        self.value = value
+        self.allowed = allowed
+        super().__init__(f"{field_name}: {value!r} is not allowed; expected {allowed}")
+
+
+@dataclass
+class Plane:
+    """A particle-less flat wall: a point on it and the normal pointing into the fluid."""
+
+    point: tuple
+    normal: tuple
+
+
+@dataclass
+class SolverConfig:
+    """Numerics of one run. Units are SI throughout."""
+
+    dim: int = 3
+    dx: float = 0.02
+    hdx: float = 1.3  # h = hdx * dx; support 2h (thesis runs: 2.6 dx)
+    kernel: str = "wendland"
+    viscosity: str = "artificial"
+    alpha: float = 0.02  # artificial viscosity coefficient (Monaghan 1992)
+    nu: float = 1.0e-6  # kinematic viscosity of water [m^2/s], laminar and SPS
+    sps_cs: float = 0.12  # Smagorinsky constant (thesis Eq. 2.20)
+    sps_ci: float = 6.6e-3  # isotropic SPS coefficient C_I (thesis Eq. 2.19)
+    boundary: str = "dynamic"
+    mk_beta: float = 1.0  # fluid / boundary particle spacing ratio (thesis Eq. 2.26)
+    density_diffusion: str = "delta"
+    delta: float = 0.1  # delta-SPH coefficient (Molteni & Colagrossi 2009)
+    xsph: bool = True
+    xsph_eps: float = 0.5  # thesis Eq. 2.22
+    shepard_every: int = 0  # steps between Shepard filters (thesis Eq. 2.28 used 40); 0 = off
+    rho0: float = 1000.0
+    gamma: float = 7.0
+    c0: float = 0.0  # sound speed [m/s]; 0 = c0_coef * sqrt(g * H)
+    c0_coef: float = 10.0
+    depth: float = 0.4  # reference depth H [m] for c0 and the wall forces
+    gravity: tuple = (0.0, 0.0, -9.81)
+    cfl: float = 0.3
+    dt_fixed: float = 0.0  # > 0 forces this time step (tests, stability studies)
+    precision: str = "float32"
+    device: str = "cpu"
+    cpu_threads: int = 0  # threads for the heavy passes on a CPU device; 0 = every core
+    domain_lo: tuple = (0.0, 0.0, 0.0)
+    domain_hi: tuple = (1.0, 1.0, 1.0)
+    periodic: tuple = (False, False, False)
+    planes: list = field(default_factory=list)
+    rho_min_ratio: float = 0.8  # health check: density bounds as fractions of rho0
+    rho_max_ratio: float = 1.25
+
+    # -- derived quantities -------------------------------------------------------------
+    @property
+    def h(self) -> float:
+        return self.hdx * self.dx
+
+    @property
+    def g_norm(self) -> float:
+        return math.sqrt(sum(c * c for c in self.gravity))
+
+    @property
+    def sound_speed(self) -> float:
+        if self.c0 > 0.0:
+            return self.c0
+        return self.c0_coef * math.sqrt(self.g_norm * self.depth)
+
+    @property
+    def eos_b(self) -> float:
+        """Tait stiffness B = c0^2 rho0 / gamma (thesis Eq. 2.13)."""
+        return self.sound_speed ** 2 * self.rho0 / self.gamma
+
+    def replace(self, **changes) -> "SolverConfig":
+        return dataclasses.replace(self, **changes)
+
+    # -- validation ---------------------------------------------------------------------
+    def validate(self) -> "SolverConfig":
+        def choice(name, allowed):
+            value = getattr(self, name)
+            if value not in allowed:
+                raise ConfigError(name, value, "one of " + ", ".join(allowed))
+
+        def positive(name, strict=True):
+            value = getattr(self, name)
+            ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+            if not ok or (value <= 0.0 if strict else value < 0.0):
+                raise ConfigError(name, value, "a finite number " + ("> 0" if strict else ">= 0"))
+
+        def vector(name, length=3):
+            value = getattr(self, name)
+            try:
+                ok = len(value) == length and all(math.isfinite(float(c)) for c in value)
+            except (TypeError, ValueError):
+                ok = False
+            if not ok:
+                raise ConfigError(name, value, f"a list of {length} finite numbers")
+
+        if self.dim not in (2, 3):
+            raise ConfigError("dim", self.dim, "2 or 3")
+        choice("kernel", KERNELS)
+        choice("viscosity", VISCOSITIES)
+        choice("boundary", BOUNDARIES)
+        choice("density_diffusion", DENSITY_DIFFUSIONS)
+        choice("precision", PRECISIONS)
+        for name in ("dx", "hdx", "rho0", "gamma", "depth", "cfl", "c0_coef", "xsph_eps", "mk_beta"):
+            positive(name)
+        for name in ("alpha", "nu", "sps_cs", "sps_ci", "delta", "c0", "dt_fixed"):
+            positive(name, strict=False)
+        if self.cfl > 1.0:
+            raise ConfigError("cfl", self.cfl, "a number in (0, 1]")
+        if not isinstance(self.cpu_threads, int) or self.cpu_threads < 0:
+            raise ConfigError("cpu_threads", self.cpu_threads, "an integer >= 0 (0 = every core)")
+        if not isinstance(self.shepard_every, int) or self.shepard_every < 0:
+            raise ConfigError("shepard_every", self.shepard_every, "an integer >= 0 (0 = off)")
+        for name in ("gravity", "domain_lo", "domain_hi", "periodic"):
+            vector(name)
+        if self.g_norm <= 0.0:
+            raise ConfigError("gravity", self.gravity, "a non-zero vector (it sets c0 and the wall forces)")
+        if any(lo >= hi for lo, hi in zip(self.domain_lo, self.domain_hi)):
+            raise ConfigError("domain_hi", self.domain_hi, f"every component above domain_lo {self.domain_lo}")
+        if self.dim == 2 and (self.gravity[2] != 0.0 or self.periodic[2]):
+            raise ConfigError("gravity", self.gravity, "a vector in the x-y plane for a 2D run (z is unused)")
+        if not 0.0 < self.rho_min_ratio < 1.0 < self.rho_max_ratio:
+            raise ConfigError("rho_min_ratio/rho_max_ratio", (self.rho_min_ratio, self.rho_max_ratio),
+                              "0 < rho_min_ratio < 1 < rho_max_ratio")
+        for axis, periodic in enumerate(self.periodic):
+            if periodic and (self.domain_hi[axis] - self.domain_lo[axis]) < 3 * 2 * self.h:
+                raise ConfigError("periodic", self.periodic,
+                                  f"periodic axes at least 3 kernel supports long (axis {axis} is shorter)")
+        for k, plane in enumerate(self.planes):
+            normal = getattr(plane, "normal", None)
+            try:
+                norm = math.sqrt(sum(float(c) ** 2 for c in normal)) if len(normal) == 3 else 0.0
+                ok = len(plane.point) == 3 and norm > 0.0
+            except (TypeError, ValueError, AttributeError):
+                ok = False
+            if not ok:
+                raise ConfigError(f"planes[{k}]", plane, "a Plane with a 3-vector point and a non-zero normal")
+        return self

@@ -1,0 +1,36 @@
+"""Density treatments: the continuity equation, delta-SPH diffusion, the Shepard filter.
+
+- continuity: thesis Eq. 2.11, drho_a/dt = sum_b m_b u_ab . grad_a W_ab.
+- delta: density diffusion of Molteni & Colagrossi 2009 (delta = 0.1) with the (linearised) hydrostatic
+  correction of Fourtakas et al. 2019 (DualSPHysics' DDT type 2), so that the diffusion does not
+  erode the hydrostatic density gradient of a tank at rest:
+  D_a = delta h c0 sum_b 2 ((rho_b - rho_a) - rho^H_ba) (r_ba . grad_a W_ab) / (r^2 + 0.01 h^2) V_b.
+- Shepard filter: thesis Eq. 2.28, rho_a = sum_b m_b W_ab / sum_b (m_b / rho_b) W_ab. It is a
+  normalised sum, so a lattice whose plain kernel sum is not 1 leaves a uniform density unchanged.
+"""
+
+import functools
+
+import warp as wp
+
+DENSITY_DIFFUSION_ID = {"none": 0, "delta": 1}
+
+
+@functools.lru_cache(maxsize=None)
+def build(scalar):
+    vec = wp.types.vector(3, scalar)
+
+    @wp.func
+    def continuity(m_b: scalar, u_ab: vec, grad: vec) -> scalar:
+        return m_b * wp.dot(u_ab, grad)
+
+    @wp.func
+    def delta_diffusion(delta_hc0: scalar, rho_a: scalar, rho_b: scalar, m_b: scalar, r_ab: vec,
+                        grad: vec, eta2: scalar, gravity: vec, rho0: scalar, c0: scalar) -> scalar:
+        # hydrostatic density difference rho^H_b - rho^H_a for b at r_b = r_a - r_ab, the Tait law
+        # linearised (Fourtakas et al. 2019): rho0 g.(r_b - r_a) / c0^2
+        rho_h = rho0 * wp.dot(gravity, -r_ab) / (c0 * c0)
+        psi = scalar(2.0) * ((rho_b - rho_a) - rho_h) * wp.dot(-r_ab, grad) / (wp.dot(r_ab, r_ab) + eta2)
+        return delta_hc0 * psi * m_b / rho_b
+
+    return continuity, delta_diffusion

@@ -1,0 +1,39 @@
+"""Launching the heavy passes on every core of a CPU.
+
+Warp runs a CPU kernel on one thread, and its ctypes call releases the GIL, so a pass whose
+threads are independent can be cut into contiguous chunks launched from a thread pool. Each such
+kernel takes ``chunk, stride`` as its last two arguments. On a GPU the
+whole range goes in one launch.
+
+Chunks are strided, not contiguous: particle = wp.tid() * stride + chunk. Fluid and boundary
+particles cost very different amounts and lie in separate index ranges, so contiguous halves
+would leave one core idle. A kernel that reduces (maxima) keeps one slot per chunk, because CPU
+atomics are not atomic across these threads.
+"""
+import os
+from concurrent.futures import ThreadPoolExecutor
+
+import warp as wp
+
+
+class Launcher:
+    def __init__(self, device, threads: int = 0):
+        self.device = device
+        if not device.is_cpu:
+            threads = 1
+        self.threads = max(1, threads or os.cpu_count() or 1)
+        self._pool = ThreadPoolExecutor(self.threads) if self.threads > 1 else None
+        self._loaded = set()
+
+    def __call__(self, kernel, n: int, inputs: list):
+        if self._pool is None or n < 2 * self.threads or kernel not in self._loaded:
+            # one thread; a kernel's first launch also loads its module, which must not race
+            wp.launch(kernel, dim=n, inputs=[*inputs, 0, 1], device=self.device)
+            self._loaded.add(kernel)
+            return
+        k = self.threads
+        futures = [self._pool.submit(wp.launch, kernel, dim=(n - chunk + k - 1) // k, inputs=[*inputs, chunk, k],
+                                     device=self.device)
+                   for chunk in range(k)]
+        for f in futures:
+            f.result()

@@ -1,0 +1,317 @@
+"""The passes of one solver step, one Warp kernel each, compiled once per floating-point type.
+
+Models are chosen at run time through integer ids held in ``Params`` (see kernels.KERNEL_ID,
+viscosity.VISCOSITY_ID, boundaries.BOUNDARY_ID, density.DENSITY_DIFFUSION_ID); the physics of
+each model lives in its own module and is only combined here.
+
+Step (predictor-corrector as GPUSPH, Herault et al. 2010):
+  neighbours(x_n) -> eos -> [sps] -> interact(n) -> choose_dt
+  -> integrate(dt/2) -> eos -> [sps] -> interact(n+1/2) -> integrate(dt) into the candidate state
+  -> health(candidate) -> commit (only if healthy) -> tick -> [shepard every N steps]
+The committed state is never overwritten by a candidate that failed a health check.
+"""
+
+import functools
+
+import warp as wp
+
+from . import boundaries, density, eos, kernels, neighbours, viscosity
+
+FLUID = 0
+BOUNDARY = 1
+
+# health checks, in the order they are reported
+CHECKS = ("non_finite", "outside_domain", "density_bounds")
+NO_FAILURE = 2 ** 31 - 1
+DYNAMIC = boundaries.BOUNDARY_ID["dynamic"]
+LENNARD_JONES = boundaries.BOUNDARY_ID["lennard_jones"]
+ARTIFICIAL = viscosity.VISCOSITY_ID["artificial"]
+SPS = viscosity.VISCOSITY_ID["sps"]
+
+
+@functools.lru_cache(maxsize=None)
+def build(scalar):
+    vec = wp.types.vector(3, scalar)
+    mat33 = wp.types.matrix((3, 3), scalar)
+    _, _, kernel_w, grad_factor, _ = kernels.build(scalar)
+    eos_pressure, _, _ = eos.build(scalar)
+    visc_artificial, visc_laminar, sps_stress, sps_accel = viscosity.build(scalar)
+    continuity, delta_diffusion = density.build(scalar)
+    lennard_jones, monaghan_kajtar, plane_kernel_flux = boundaries.build(scalar)
+    Grid, separation, _, _, _ = neighbours.build(scalar)
+
+    @wp.struct
+    class Params:
+        dim: int
+        kernel: int
+        norm: scalar
+        h: scalar
+        inv_h: scalar
+        eta2: scalar  # 0.01 h^2 regulariser
+        viscosity: int
+        alpha: scalar
+        nu: scalar
+        cs_dl2: scalar
+        ci_dl2: scalar
+        boundary: int
+        lj_d: scalar
+        lj_r0: scalar
+        mk_k: scalar
+        mk_beta: scalar
+        plane_r0: scalar
+        delta_hc0: scalar  # delta h c0, 0 when density diffusion is off
+        xsph_eps: scalar  # 0 when XSPH is off
+        rho0: scalar
+        eos_b: scalar
+        gamma: scalar
+        c0: scalar
+        gravity: vec
+        lo: vec
+        hi: vec
+        periodic: wp.vec3i
+        rho_min: scalar
+        rho_max: scalar
+        cfl: scalar
+        dt_fixed: float
+        n_planes: int
+
+    @wp.func
+    def pair(p: Params, r_ab: vec, u_ab: vec, rho_a: scalar, p_a: scalar, m_a: scalar, td_a: vec, to_a: vec,
+             rho_b: scalar, p_b: scalar, m_b: scalar, t_b: int, td_b: vec, to_b: vec):
+        """What particle b does to fluid particle a: (acceleration, drho/dt, XSPH velocity, |mu|)."""
+        zero = vec(scalar(0.0))
+        r = wp.length(r_ab)
+        if r >= scalar(2.0) * p.h:
+            return zero, scalar(0.0), zero, scalar(0.0)
+        if t_b == BOUNDARY and p.boundary != DYNAMIC:
+            if p.boundary == LENNARD_JONES:
+                return lennard_jones(p.lj_d, p.lj_r0, r_ab, r), scalar(0.0), zero, scalar(0.0)
+            return monaghan_kajtar(p.mk_k, p.mk_beta, p.inv_h, m_a, m_b, r_ab, r), scalar(0.0), zero, scalar(0.0)
+        grad = r_ab * grad_factor(p.kernel, p.norm, p.inv_h, r)
+        drho = continuity(m_b, u_ab, grad)
+        if t_b == FLUID and p.delta_hc0 > scalar(0.0):
+            drho += delta_diffusion(p.delta_hc0, rho_a, rho_b, m_b, r_ab, grad, p.eta2, p.gravity, p.rho0,
+                                    p.c0)
+        acc = -m_b * (p_a / (rho_a * rho_a) + p_b / (rho_b * rho_b)) * grad
+        if p.viscosity == ARTIFICIAL:
+            # c0 for the mean sound speed, as GPUSPH: weak compressibility keeps c within ~1% of c0
+            acc += visc_artificial(p.alpha, p.h, p.c0, scalar(0.5) * (rho_a + rho_b), m_b, u_ab, r_ab,
+                                   p.eta2, grad)
+        else:
+            acc += visc_laminar(p.nu, rho_a, rho_b, m_b, u_ab, r_ab, p.eta2, grad)
+            if p.viscosity == SPS and t_b == FLUID:
+                acc += sps_accel(m_b, rho_a, rho_b, td_a, to_a, td_b, to_b, grad)
+        xsph = zero
+        if t_b == FLUID and p.xsph_eps > scalar(0.0):
+            xsph = -p.xsph_eps * m_b / (scalar(0.5) * (rho_a + rho_b)) * kernel_w(p.kernel, p.norm, p.inv_h, r) * u_ab
+        mu = wp.abs(wp.dot(u_ab, r_ab)) / (r * r + p.eta2)
+        return acc, drho, xsph, mu
+
+    @wp.func
+    def track_max(maxima: wp.array(dtype=scalar), k: int, value: scalar):
+        # read before the atomic: after the first few threads almost none need to write
+        if value > maxima[k]:
+            wp.atomic_max(maxima, k, value)
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def equation_of_state(p: Params, rho: wp.array(dtype=scalar), pressure: wp.array(dtype=scalar)):
+        i = wp.tid()
+        pressure[i] = eos_pressure(rho[i], p.rho0, p.eos_b, p.gamma)
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def sps_strain(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32),
+                   pos: wp.array(dtype=vec), vel: wp.array(dtype=vec), rho: wp.array(dtype=scalar),
+                   mass: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
+                   tau_diag: wp.array(dtype=vec), tau_off: wp.array(dtype=vec), chunk: int, stride: int):
+        i = wp.tid() * stride + chunk
+        zero = vec(scalar(0.0))
+        if ptype[i] != FLUID:
+            tau_diag[i] = zero
+            tau_off[i] = zero
+            return
+        grad_u = mat33(scalar(0.0))
+        base = i * grid.max_neighbours
+        for k in range(count[i]):
+            j = nbr[base + k]
+            if ptype[j] == FLUID or p.boundary == DYNAMIC:
+                r_ab = separation(grid, pos[i], pos[j])
+                r = wp.length(r_ab)
+                if r < scalar(2.0) * p.h:
+                    grad = r_ab * grad_factor(p.kernel, p.norm, p.inv_h, r)
+                    grad_u += mass[j] / rho[j] * wp.outer(vel[j] - vel[i], grad)
+        d, o = sps_stress(grad_u, p.cs_dl2, p.ci_dl2)
+        tau_diag[i] = d
+        tau_off[i] = o
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def interact(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32),
+                 pos: wp.array(dtype=vec), vel: wp.array(dtype=vec), rho: wp.array(dtype=scalar),
+                 pressure: wp.array(dtype=scalar), mass: wp.array(dtype=scalar),
+                 ptype: wp.array(dtype=wp.int32), body: wp.array(dtype=wp.int32),
+                 tau_diag: wp.array(dtype=vec), tau_off: wp.array(dtype=vec),
+                 plane_point: wp.array(dtype=vec), plane_normal: wp.array(dtype=vec),
+                 acc: wp.array(dtype=vec), drho: wp.array(dtype=scalar), xsph: wp.array(dtype=vec),
+                 maxima: wp.array(dtype=scalar), chunk: int, stride: int):
+        i = wp.tid() * stride + chunk
+        xi = pos[i]
+        ui = vel[i]
+        rho_i = rho[i]
+        p_i = pressure[i]
+        m_i = mass[i]
+        base = i * grid.max_neighbours
+        a = vec(scalar(0.0))
+        dr = scalar(0.0)
+        xs = vec(scalar(0.0))
+        if ptype[i] == FLUID:
+            a = p.gravity
+            mu_max = scalar(0.0)
+            for k in range(count[i]):
+                j = nbr[base + k]
+                da, ddr, dxs, mu = pair(p, separation(grid, xi, pos[j]), ui - vel[j], rho_i, p_i, m_i,
+                                        tau_diag[i], tau_off[i], rho[j], pressure[j], mass[j], ptype[j],
+                                        tau_diag[j], tau_off[j])
+                a += da
+                dr += ddr
+                xs += dxs
+                mu_max = wp.max(mu_max, mu)
+            for k in range(p.n_planes):
+                n_k = plane_normal[k]
+                d = wp.dot(xi - plane_point[k], n_k)
+                flux = plane_kernel_flux(p.kernel, p.norm, p.inv_h, p.dim, d)
+                if flux > scalar(0.0):
+                    a += scalar(2.0) * wp.max(p_i, scalar(0.0)) / rho_i * flux * n_k
+                    dr -= scalar(2.0) * rho_i * wp.dot(ui, n_k) * flux
+                    a += lennard_jones(p.lj_d, p.plane_r0, d * n_k, d)
+            track_max(maxima, 2 * chunk, wp.length(a))
+            track_max(maxima, 2 * chunk + 1, mu_max)
+        else:
+            # a boundary particle: density (dynamic boundaries) and, on a body, the reaction
+            # of every fluid neighbour, so that mass x acc sums to the force on the body
+            for k in range(count[i]):
+                j = nbr[base + k]
+                if ptype[j] == FLUID:
+                    r_ji = separation(grid, pos[j], xi)
+                    if p.boundary == DYNAMIC and wp.length(r_ji) < scalar(2.0) * p.h:
+                        grad = -r_ji * grad_factor(p.kernel, p.norm, p.inv_h, wp.length(r_ji))
+                        dr += continuity(mass[j], ui - vel[j], grad)
+                    if body[i] >= 0:
+                        da, ddr, dxs, mu = pair(p, r_ji, vel[j] - ui, rho[j], pressure[j], mass[j],
+                                                tau_diag[j], tau_off[j], rho_i, p_i, m_i, BOUNDARY,
+                                                tau_diag[i], tau_off[i])
+                        a -= mass[j] / m_i * da
+        acc[i] = a
+        drho[i] = dr
+        xsph[i] = xs
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def choose_dt(p: Params, t_target: float, maxima: wp.array(dtype=scalar), fail: wp.array(dtype=wp.int32),
+                  clock: wp.array(dtype=float)):
+        """dt = CFL min(sqrt(h/|a|max), h/(c0 + h max|mu|), 0.125 h^2/nu) (Monaghan 1992; GPUSPH)."""
+        a_max = scalar(0.0)
+        mu_max = scalar(0.0)
+        for slot in range(maxima.shape[0] // 2):
+            a_max = wp.max(a_max, maxima[2 * slot])
+            mu_max = wp.max(mu_max, maxima[2 * slot + 1])
+        dt = p.dt_fixed
+        if dt <= 0.0:
+            h = float(p.h)
+            dt = float(p.cfl) * h / (float(p.c0) + h * float(mu_max))
+            if a_max > scalar(0.0):
+                dt = wp.min(dt, float(p.cfl) * wp.sqrt(h / float(a_max)))
+            if p.viscosity != ARTIFICIAL and p.nu > scalar(0.0):
+                dt = wp.min(dt, float(p.cfl) * 0.125 * h * h / float(p.nu))
+        remaining = t_target - clock[0]
+        if remaining <= 1.0e-12 * wp.max(1.0, t_target):
+            dt = 0.0
+        elif dt > remaining:
+            dt = remaining
+        for c in range(3):
+            if fail[c] != NO_FAILURE:
+                dt = 0.0
+        clock[1] = dt
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def integrate(p: Params, clock: wp.array(dtype=float), factor: scalar, pos: wp.array(dtype=vec),
+                  vel: wp.array(dtype=vec), rho: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
+                  vel_rate: wp.array(dtype=vec), acc: wp.array(dtype=vec), drho: wp.array(dtype=scalar),
+                  xsph: wp.array(dtype=vec), pos_out: wp.array(dtype=vec), vel_out: wp.array(dtype=vec),
+                  rho_out: wp.array(dtype=scalar)):
+        """x_out = x + f dt (u_rate + xsph), u_out = u + f dt a, rho_out = rho + f dt drho.
+
+        f = 1/2 with the rates at n (predictor), f = 1 with the rates at n + 1/2 (corrector).
+        Boundary particles keep position and velocity; dynamic ones update density.
+        """
+        i = wp.tid()
+        dt = factor * scalar(clock[1])
+        rho_out[i] = rho[i] + dt * drho[i]
+        if ptype[i] != FLUID:
+            pos_out[i] = pos[i]
+            vel_out[i] = vel[i]
+            return
+        x = pos[i] + dt * (vel_rate[i] + xsph[i])
+        for ax in range(3):
+            if p.periodic[ax] != 0:
+                span = p.hi[ax] - p.lo[ax]
+                x[ax] = x[ax] - span * wp.floor((x[ax] - p.lo[ax]) / span)
+        pos_out[i] = x
+        vel_out[i] = vel[i] + dt * acc[i]
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def health(p: Params, pos: wp.array(dtype=vec), vel: wp.array(dtype=vec), rho: wp.array(dtype=scalar),
+               ptype: wp.array(dtype=wp.int32), fail: wp.array(dtype=wp.int32)):
+        i = wp.tid()
+        x = pos[i]
+        r = rho[i]
+        if wp.isnan(x) or wp.isinf(x) or wp.isnan(vel[i]) or wp.isinf(vel[i]) or wp.isnan(r) or wp.isinf(r):
+            wp.atomic_min(fail, 0, i)
+            return
+        if ptype[i] == FLUID:
+            for ax in range(3):
+                if x[ax] < p.lo[ax] or x[ax] > p.hi[ax]:
+                    wp.atomic_min(fail, 1, i)
+        if r < p.rho_min or r > p.rho_max:
+            wp.atomic_min(fail, 2, i)
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def commit(fail: wp.array(dtype=wp.int32), pos_new: wp.array(dtype=vec), vel_new: wp.array(dtype=vec),
+               rho_new: wp.array(dtype=scalar), pos: wp.array(dtype=vec), vel: wp.array(dtype=vec),
+               rho: wp.array(dtype=scalar)):
+        i = wp.tid()
+        if fail[0] == NO_FAILURE and fail[1] == NO_FAILURE and fail[2] == NO_FAILURE:
+            pos[i] = pos_new[i]
+            vel[i] = vel_new[i]
+            rho[i] = rho_new[i]
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def tick(fail: wp.array(dtype=wp.int32), clock: wp.array(dtype=float), steps: wp.array(dtype=wp.int32)):
+        """Advance time and step count, or record when the first failing step would have ended."""
+        if fail[0] == NO_FAILURE and fail[1] == NO_FAILURE and fail[2] == NO_FAILURE:
+            if clock[1] > 0.0:
+                clock[0] = clock[0] + clock[1]
+                steps[0] = steps[0] + 1
+        elif steps[1] < 0:
+            steps[1] = steps[0] + 1
+            clock[3] = clock[0] + clock[1]
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def shepard(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32),
+                pos: wp.array(dtype=vec), rho: wp.array(dtype=scalar), mass: wp.array(dtype=scalar),
+                ptype: wp.array(dtype=wp.int32), rho_out: wp.array(dtype=scalar), chunk: int, stride: int):
+        """rho_a = sum_b m_b W_ab / sum_b (m_b / rho_b) W_ab, the particle itself included (Eq. 2.28)."""
+        i = wp.tid() * stride + chunk
+        if ptype[i] != FLUID:
+            rho_out[i] = rho[i]
+            return
+        w0 = kernel_w(p.kernel, p.norm, p.inv_h, scalar(0.0))
+        num = mass[i] * w0
+        den = mass[i] / rho[i] * w0
+        base = i * grid.max_neighbours
+        for k in range(count[i]):
+            j = nbr[base + k]
+            if ptype[j] == FLUID or p.boundary == DYNAMIC:
+                wk = kernel_w(p.kernel, p.norm, p.inv_h, wp.length(separation(grid, pos[i], pos[j])))
+                num += mass[j] * wk
+                den += mass[j] / rho[j] * wk
+        rho_out[i] = num / den
+
+    return Params, equation_of_state, sps_strain, interact, choose_dt, integrate, health, commit, tick, shepard

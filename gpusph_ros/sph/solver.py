@@ -1,0 +1,262 @@
+"""The solver driver: owns the device state and launches the passes of each step.
+
+State is structure-of-arrays on one Warp device (``cpu`` or ``cuda:N``) in one precision.
+Inside the step loop nothing is copied to the host; every few steps a handful of scalars (time,
+dt, step count, health flags) is read to decide how many steps fit before the target time.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import warp as wp
+
+from . import boundaries, density, kernels, passes, viscosity
+from .config import SolverConfig
+from .launch import Launcher
+from .neighbours import NeighbourList, NeighbourOverflow
+
+FLUID = passes.FLUID
+BOUNDARY = passes.BOUNDARY
+
+_MAX_BATCH = 64  # steps launched between two reads of the clock
+
+
+class HealthError(RuntimeError):
+    """A step failed a health check. The solver still holds the state from before that step."""
+
+    def __init__(self, check: str, step: int, time: float, particle: int, detail: str = ""):
+        self.check = check
+        self.step = step
+        self.time = time
+        self.particle = particle
+        super().__init__(f"health check '{check}' failed at step {step} (t = {time:.6g} s), "
+                         f"particle {particle}{': ' + detail if detail else ''}")
+
+
+@dataclass
+class Particles:
+    """Host-side particle set a solver starts from (one row per particle, SI units)."""
+
+    pos: np.ndarray
+    vel: np.ndarray
+    rho: np.ndarray
+    mass: np.ndarray
+    ptype: np.ndarray
+    body: np.ndarray = field(default=None)
+
+    def __post_init__(self):
+        n = len(self.pos)
+        self.pos = np.asarray(self.pos, dtype=np.float64).reshape(n, 3)
+        self.vel = np.asarray(self.vel, dtype=np.float64).reshape(n, 3)
+        self.rho = np.asarray(self.rho, dtype=np.float64).reshape(n)
+        self.mass = np.asarray(self.mass, dtype=np.float64).reshape(n)
+        self.ptype = np.asarray(self.ptype, dtype=np.int32).reshape(n)
+        self.body = (np.full(n, -1, dtype=np.int32) if self.body is None
+                     else np.asarray(self.body, dtype=np.int32).reshape(n))
+
+    def __len__(self):
+        return len(self.pos)
+
+
+def default_max_neighbours(dim: int, hdx: float, mk_beta: float = 1.0) -> int:
+    """Room for 2.5x the neighbours of a uniform lattice (plus finer boundary layers)."""
+    radius = NeighbourList.SKIN * 2.0 * hdx
+    expected = (4.0 / 3.0 * math.pi * radius ** 3) if dim == 3 else (math.pi * radius ** 2)
+    return int(8 * math.ceil(2.5 * expected * max(1.0, mk_beta) / 8))
+
+
+class Solver:
+    """Weakly-compressible SPH (thesis Section 2.3) on Warp."""
+
+    def __init__(self, config: SolverConfig, particles: Particles, max_neighbours: "int | None" = None):
+        self.config = config.validate()
+        cfg = self.config
+        self.scalar = wp.float64 if cfg.precision == "float64" else wp.float32
+        self.vec = wp.types.vector(3, self.scalar)
+        self.device = wp.get_device(cfg.device)
+        self.n = len(particles)
+        if self.n == 0:
+            raise ValueError("particles: the particle set is empty")
+        (self._Params, self._eos, self._sps, self._interact, self._choose_dt, self._integrate,
+         self._health, self._commit, self._tick, self._shepard) = passes.build(self.scalar)
+        self.params = self._make_params()
+        self.launch = Launcher(self.device, cfg.cpu_threads)
+        # boundary particles need their own list only to update their density or sum a body force
+        needs_list = (particles.ptype == FLUID) | (particles.body >= 0) | (cfg.boundary == "dynamic")
+        self.neighbours = NeighbourList(self.scalar, cfg.dim, 2.0 * cfg.h, cfg.domain_lo, cfg.domain_hi,
+                                        cfg.periodic, needs_list,
+                                        max_neighbours or default_max_neighbours(cfg.dim, cfg.hdx, cfg.mk_beta),
+                                        self.launch)
+        self._allocate(particles)
+        self._launched = 0
+        self.time, self.dt, self.steps = 0.0, 0.0, 0
+
+    # -- set-up -------------------------------------------------------------------------
+    def _make_params(self):
+        cfg = self.config
+        p = self._Params()
+        g = cfg.g_norm
+        p.dim = cfg.dim
+        p.kernel = kernels.KERNEL_ID[cfg.kernel]
+        p.norm = kernels.normalisation(cfg.kernel, cfg.dim, cfg.h)
+        p.h = cfg.h
+        p.inv_h = 1.0 / cfg.h
+        p.eta2 = 0.01 * cfg.h ** 2
+        p.viscosity = viscosity.VISCOSITY_ID[cfg.viscosity]
+        p.alpha = cfg.alpha
+        p.nu = cfg.nu
+        p.cs_dl2 = (cfg.sps_cs * cfg.dx) ** 2
+        p.ci_dl2 = cfg.sps_ci * cfg.dx ** 2
+        p.boundary = boundaries.BOUNDARY_ID[cfg.boundary]
+        p.lj_d = 5.0 * g * cfg.depth
+        p.lj_r0 = cfg.dx
+        p.mk_k = g * cfg.depth
+        p.mk_beta = cfg.mk_beta
+        p.plane_r0 = 0.5 * cfg.dx
+        p.delta_hc0 = (cfg.delta * cfg.h * cfg.sound_speed
+                       if density.DENSITY_DIFFUSION_ID[cfg.density_diffusion] else 0.0)
+        p.xsph_eps = cfg.xsph_eps if cfg.xsph else 0.0
+        p.rho0 = cfg.rho0
+        p.eos_b = cfg.eos_b
+        p.gamma = cfg.gamma
+        p.c0 = cfg.sound_speed
+        p.gravity = self.vec(*cfg.gravity)
+        p.lo = self.vec(*cfg.domain_lo)
+        p.hi = self.vec(*cfg.domain_hi)
+        p.periodic = wp.vec3i(*[1 if a else 0 for a in cfg.periodic])
+        p.rho_min = cfg.rho_min_ratio * cfg.rho0
+        p.rho_max = cfg.rho_max_ratio * cfg.rho0
+        p.cfl = cfg.cfl
+        p.dt_fixed = cfg.dt_fixed
+        p.n_planes = len(cfg.planes)
+        return p
+
+    def _allocate(self, particles: Particles):
+        cfg, dev, n, s, v = self.config, self.device, self.n, self.scalar, self.vec
+
+        def arr(data, dtype):
+            return wp.array(data, dtype=dtype, device=dev)
+
+        self.pos = arr(particles.pos, v)
+        self.vel = arr(particles.vel, v)
+        self.rho = arr(particles.rho, s)
+        self.mass = arr(particles.mass, s)
+        self.ptype = arr(particles.ptype, wp.int32)
+        self.body = arr(particles.body, wp.int32)
+        self.pressure = wp.zeros(n, dtype=s, device=dev)
+        # half-step and candidate states, rates of change, SPS stress (tau / rho)
+        self._pos_h, self._vel_h, self._rho_h = wp.zeros_like(self.pos), wp.zeros_like(self.vel), wp.zeros_like(self.rho)
+        self._pos_c, self._vel_c, self._rho_c = wp.zeros_like(self.pos), wp.zeros_like(self.vel), wp.zeros_like(self.rho)
+        self.acc, self._xsph = wp.zeros(n, dtype=v, device=dev), wp.zeros(n, dtype=v, device=dev)
+        self._drho = wp.zeros(n, dtype=s, device=dev)
+        self._tau_d, self._tau_o = wp.zeros(n, dtype=v, device=dev), wp.zeros(n, dtype=v, device=dev)
+        planes = cfg.planes or []
+        pts = [p.point for p in planes] or [(0.0, 0.0, 0.0)]
+        nrm = [np.asarray(p.normal, dtype=np.float64) / np.linalg.norm(p.normal) for p in planes] or [(0.0, 0.0, 1.0)]
+        self._plane_pt, self._plane_n = arr(np.asarray(pts, dtype=np.float64), v), arr(np.asarray(nrm), v)
+        self._maxima = wp.zeros(2 * self.launch.threads, dtype=s, device=dev)  # |a|max, |mu|max per chunk
+        self._fail = arr(np.full(3, passes.NO_FAILURE, dtype=np.int32), wp.int32)
+        self._clock = wp.zeros(4, dtype=float, device=dev)  # t, dt, -, time of a failed step
+        self._steps = arr(np.array([0, -1], dtype=np.int32), wp.int32)  # steps, failed step
+        wp.launch(self._eos, dim=n, inputs=[self.params, self.rho, self.pressure], device=dev)
+
+    # -- stepping -----------------------------------------------------------------------
+    def _forces(self, pos, vel, rho):
+        n, dev, p, nl = self.n, self.device, self.params, self.neighbours
+        wp.launch(self._eos, dim=n, inputs=[p, rho, self.pressure], device=dev)
+        if self.config.viscosity == "sps":
+            self.launch(self._sps, n, [p, nl.grid, nl.nbr, nl.count, pos, vel, rho, self.mass, self.ptype,
+                                       self._tau_d, self._tau_o])
+        self.launch(self._interact, n, [p, nl.grid, nl.nbr, nl.count, pos, vel, rho, self.pressure, self.mass,
+                                        self.ptype, self.body, self._tau_d, self._tau_o, self._plane_pt,
+                                        self._plane_n, self.acc, self._drho, self._xsph, self._maxima])
+
+    def _launch_step(self, t_target: float):
+        n, dev, p = self.n, self.device, self.params
+        self.neighbours.rebuild(self.pos)
+        self._maxima.zero_()
+        self._forces(self.pos, self.vel, self.rho)
+        wp.launch(self._choose_dt, dim=1, inputs=[p, t_target, self._maxima, self._fail, self._clock], device=dev)
+        wp.launch(self._integrate, dim=n,
+                  inputs=[p, self._clock, 0.5, self.pos, self.vel, self.rho, self.ptype, self.vel, self.acc,
+                          self._drho, self._xsph, self._pos_h, self._vel_h, self._rho_h], device=dev)
+        self._forces(self._pos_h, self._vel_h, self._rho_h)
+        wp.launch(self._integrate, dim=n,
+                  inputs=[p, self._clock, 1.0, self.pos, self.vel, self.rho, self.ptype, self._vel_h, self.acc,
+                          self._drho, self._xsph, self._pos_c, self._vel_c, self._rho_c], device=dev)
+        wp.launch(self._health, dim=n, inputs=[p, self._pos_c, self._vel_c, self._rho_c, self.ptype, self._fail],
+                  device=dev)
+        wp.launch(self._commit, dim=n, inputs=[self._fail, self._pos_c, self._vel_c, self._rho_c, self.pos,
+                                               self.vel, self.rho], device=dev)
+        wp.launch(self._tick, dim=1, inputs=[self._fail, self._clock, self._steps], device=dev)
+        self._launched += 1
+        every = self.config.shepard_every
+        if every and self._launched % every == 0:
+            nl = self.neighbours
+            self.launch(self._shepard, n, [p, nl.grid, nl.nbr, nl.count, self.pos, self.rho, self.mass, self.ptype,
+                                           self._rho_c])
+            wp.copy(self.rho, self._rho_c)
+
+    def _sync(self):
+        """Read the clock and the health flags; raise if a step failed."""
+        clock = self._clock.numpy()
+        steps = self._steps.numpy()
+        fail = self._fail.numpy()
+        self.time, self.dt, self.steps = float(clock[0]), float(clock[1]), int(steps[0])
+        for check, idx in zip(passes.CHECKS, fail):
+            if idx != passes.NO_FAILURE:
+                raise HealthError(check, int(steps[1]), float(clock[3]), int(idx))
+        overflow = int(self.neighbours.overflow.numpy()[0])
+        if overflow:
+            raise NeighbourOverflow(f"a particle has {overflow} neighbours, more than the list's "
+                                    f"{self.neighbours.max_neighbours}: particles have clumped, or raise "
+                                    f"max_neighbours")
+
+    def advance(self, t_target: float) -> float:
+        """Step until the simulated time reaches ``t_target`` exactly; returns the time.
+
+        Raises HealthError when a step fails a check; the state is then the last healthy one.
+        """
+        self._sync()
+        while self.time < t_target - 1.0e-12 * max(1.0, t_target):
+            batch = 1
+            if self.dt > 0.0:
+                batch = int(min(_MAX_BATCH, max(1, 0.8 * (t_target - self.time) / self.dt)))
+            for _ in range(batch):
+                self._launch_step(t_target)
+            self._sync()
+        return self.time
+
+    def step(self) -> float:
+        """One step of the adaptive size (or dt_fixed); returns the new time."""
+        self._sync()
+        self._launch_step(math.inf)
+        self._sync()
+        return self.time
+
+    def clear_failure(self):
+        """Forget a reported failure so the run can go on (e.g. after changing dt_fixed)."""
+        self._fail.assign(np.full(3, passes.NO_FAILURE, dtype=np.int32))
+        self._steps.assign(np.array([self._steps.numpy()[0], -1], dtype=np.int32))
+        self.neighbours.overflow.zero_()
+
+    # -- state out ------------------------------------------------------------------------
+    def snapshot(self) -> dict:
+        """Host copies of the state: pos, vel (n x 3), rho, pressure, mass (n), ptype, body (n)."""
+        wp.launch(self._eos, dim=self.n, inputs=[self.params, self.rho, self.pressure], device=self.device)
+        return {
+            "pos": self.pos.numpy().astype(np.float64),
+            "vel": self.vel.numpy().astype(np.float64),
+            "rho": self.rho.numpy().astype(np.float64),
+            "pressure": self.pressure.numpy().astype(np.float64),
+            "mass": self.mass.numpy().astype(np.float64),
+            "ptype": self.ptype.numpy(),
+            "body": self.body.numpy(),
+        }
+
+    def mean_neighbours(self) -> float:
+        """Mean neighbour-list length (within the list radius) at the current positions."""
+        self.neighbours.rebuild(self.pos)
+        return self.neighbours.mean_neighbours()
