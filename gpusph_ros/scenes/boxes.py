@@ -27,11 +27,12 @@ def lattice(lo, hi, dx: float, dim: int) -> np.ndarray:
     return pts
 
 
-def wall_particles(hi, dx: float, dim: int, layers: int) -> np.ndarray:
-    """``layers`` layers of lattice points outside the walls of the open-top tank [0, hi]."""
-    pad = layers * dx
-    lo_out = [-pad] * dim
-    hi_out = [hi[ax] + pad for ax in range(dim - 1)] + [hi[dim - 1]]
+def wall_particles(hi, dx: float, dim: int, layers: int, periodic=(False, False, False)) -> np.ndarray:
+    """``layers`` layers of lattice points outside the walls of the open-top tank [0, hi]
+    (no walls across periodic axes)."""
+    pad = [0.0 if periodic[ax] else layers * dx for ax in range(dim)]
+    lo_out = [-pad[ax] for ax in range(dim)]
+    hi_out = [hi[ax] + pad[ax] for ax in range(dim - 1)] + [hi[dim - 1]]
     pts = lattice(lo_out, hi_out, dx, dim)
     inside = np.ones(len(pts), dtype=bool)
     for ax in range(dim):
@@ -39,10 +40,43 @@ def wall_particles(hi, dx: float, dim: int, layers: int) -> np.ndarray:
     return pts[~inside]
 
 
-def tank_planes(hi, dim: int) -> list:
+def wall_shell(hi, dx: float, dim: int, spacing: float, periodic=(False, False, False)) -> np.ndarray:
+    """One layer of points dx/2 outside the walls of the open-top tank [0, hi], ``spacing`` apart
+    along the walls (finer than dx for Monaghan-Kajtar boundaries); none across periodic axes."""
+    up = dim - 1
+    pts = []
+    for ax in range(dim):
+        if periodic[ax]:
+            continue
+        for side in ((0,) if ax == up else (0, 1)):
+            axes = []
+            for other in range(dim):
+                if other == ax:
+                    axes.append(np.array([-0.5 * dx if side == 0 else hi[ax] + 0.5 * dx]))
+                elif periodic[other]:
+                    # a whole number of spacings per period, so the layer tiles across the seam
+                    count = max(1, int(round(hi[other] / spacing)))
+                    axes.append((np.arange(count) + 0.5) * hi[other] / count)
+                else:
+                    top = hi[other] + (0.5 * dx if other != up else 0.0)
+                    axes.append(np.arange(-0.5 * dx, top + 1e-9 * dx, spacing))
+            grids = np.meshgrid(*axes, indexing="ij")
+            face = np.zeros((grids[0].size, 3))
+            for k in range(dim):
+                face[:, k] = grids[k].ravel()
+            pts.append(face)
+    pts = np.concatenate(pts)
+    # faces meet along the edges; keep one point per position
+    _, keep = np.unique(np.round(pts / (1e-6 * dx)).astype(np.int64), axis=0, return_index=True)
+    return pts[np.sort(keep)]
+
+
+def tank_planes(hi, dim: int, periodic=(False, False, False)) -> list:
     """The floor and side walls of the open-top tank [0, hi] as planes with inward normals."""
     planes = []
     for ax in range(dim):
+        if periodic[ax]:
+            continue
         normal = [0.0, 0.0, 0.0]
         normal[ax] = 1.0
         planes.append(Plane(point=(0.0, 0.0, 0.0), normal=tuple(normal)))
@@ -64,9 +98,11 @@ def box_tank(cfg: SolverConfig, tank, fluid_boxes, walls: str = "particles", hea
     """Particles and configuration for fluid boxes at rest in an open-top tank [0, tank].
 
     ``fluid_boxes`` is a list of (lo, hi) boxes; each starts hydrostatic under its own top.
-    ``walls`` is "particles" (the configured boundary model) or "planes". Returns the config
-    with domain and planes filled in, and the particle set.
+    ``walls`` is "particles" (the configured boundary model) or "planes". Horizontal axes that
+    ``cfg.periodic`` marks have no walls and the domain spans exactly [0, tank] there. Returns
+    the config with domain and planes filled in, and the particle set.
     """
+    periodic = cfg.periodic
     dim, dx = cfg.dim, cfg.dx
     up = dim - 1
     g = cfg.g_norm
@@ -81,19 +117,25 @@ def box_tank(cfg: SolverConfig, tank, fluid_boxes, walls: str = "particles", hea
     planes = []
     if walls == "particles":
         layers = boundary_layers(cfg.boundary, cfg.hdx)
-        wall = wall_particles(tank, dx, dim, layers)
+        if cfg.boundary == "dynamic":
+            wall = wall_particles(tank, dx, dim, layers, periodic)
+        else:
+            spacing = dx / cfg.mk_beta if cfg.boundary == "monaghan_kajtar" else dx
+            wall = wall_shell(tank, dx, dim, spacing, periodic)
         surface = max(hi[up] for _, hi in fluid_boxes)
         wall_rho = hydrostatic_density(surface - wall[:, up], cfg.rho0, cfg.eos_b, cfg.gamma, g)
     elif walls == "planes":
-        planes = tank_planes(tank, dim)
+        planes = tank_planes(tank, dim, periodic)
         wall = np.zeros((0, 3))
         wall_rho = np.zeros(0)
     else:
         raise ValueError(f"walls: {walls!r} is not one of particles, planes")
-    pad = (layers + 1) * dx
-    lo = [-pad if ax < dim else -1.0 for ax in range(3)]
-    hi = [tank[ax] + pad if ax < dim else 1.0 for ax in range(3)]
-    hi[up] = tank[up] * (1.0 + headroom) + pad
+    pad = [0.0 if periodic[ax] else (layers + 1) * dx for ax in range(3)]
+    lo = [-pad[ax] if ax < dim else -1.0 for ax in range(3)]
+    hi = [tank[ax] + pad[ax] if ax < dim else 1.0 for ax in range(3)]
+    up_pad = (layers + 1) * dx
+    lo[up] = -up_pad
+    hi[up] = tank[up] * (1.0 + headroom) + up_pad
     cfg = cfg.replace(domain_lo=tuple(lo), domain_hi=tuple(hi), planes=planes)
     n_f, n_w = len(fluid), len(wall)
     particles = Particles(

@@ -16,6 +16,9 @@ BOUNDARIES = ("lennard_jones", "monaghan_kajtar", "dynamic")
 DENSITY_DIFFUSIONS = ("none", "delta")
 PRECISIONS = ("float32", "float64")
 
+# neighbour lists reach LIST_SKIN kernel supports, so pairs closing in during a half step stay listed
+LIST_SKIN = 1.05
+
 
 class ConfigError(ValueError):
     """A configuration field has a value the solver cannot use."""
@@ -42,17 +45,17 @@ class SolverConfig:
     dim: int = 3
     dx: float = 0.02
     hdx: float = 1.3  # h = hdx * dx; support 2h (thesis runs: 2.6 dx)
-    kernel: str = "wendland"
+    kernel: str = "cubic_spline"
     viscosity: str = "artificial"
-    alpha: float = 0.02  # artificial viscosity coefficient (Monaghan 1992)
+    alpha: float = 0.1  # artificial viscosity coefficient (Monaghan 1992); DualSPHysics dam-break value
     nu: float = 1.0e-6  # kinematic viscosity of water [m^2/s], laminar and SPS
     sps_cs: float = 0.12  # Smagorinsky constant (thesis Eq. 2.20)
     sps_ci: float = 6.6e-3  # isotropic SPS coefficient C_I (thesis Eq. 2.19)
     boundary: str = "dynamic"
-    mk_beta: float = 1.0  # fluid / boundary particle spacing ratio (thesis Eq. 2.26)
+    mk_beta: float = 2.0  # fluid / boundary particle spacing ratio (thesis Eq. 2.26), >= 1
     density_diffusion: str = "delta"
     delta: float = 0.1  # delta-SPH coefficient (Molteni & Colagrossi 2009)
-    xsph: bool = True
+    xsph: bool = False  # on in the thesis runs; off by default as in DualSPHysics
     xsph_eps: float = 0.5  # thesis Eq. 2.22
     shepard_every: int = 0  # steps between Shepard filters (thesis Eq. 2.28 used 40); 0 = off
     rho0: float = 1000.0
@@ -129,6 +132,8 @@ class SolverConfig:
             positive(name)
         for name in ("alpha", "nu", "sps_cs", "sps_ci", "delta", "c0", "dt_fixed"):
             positive(name, strict=False)
+        if self.mk_beta < 1.0:
+            raise ConfigError("mk_beta", self.mk_beta, "a number >= 1 (boundary particles no sparser than fluid)")
         if self.cfl > 1.0:
             raise ConfigError("cfl", self.cfl, "a number in (0, 1]")
         if not isinstance(self.cpu_threads, int) or self.cpu_threads < 0:
@@ -147,9 +152,11 @@ class SolverConfig:
             raise ConfigError("rho_min_ratio/rho_max_ratio", (self.rho_min_ratio, self.rho_max_ratio),
                               "0 < rho_min_ratio < 1 < rho_max_ratio")
         for axis, periodic in enumerate(self.periodic):
-            if periodic and (self.domain_hi[axis] - self.domain_lo[axis]) < 3 * 2 * self.h:
+            # the cell search wraps one cell each way: a period must hold three whole cells
+            if periodic and (self.domain_hi[axis] - self.domain_lo[axis]) < 3 * LIST_SKIN * 2 * self.h:
                 raise ConfigError("periodic", self.periodic,
-                                  f"periodic axes at least 3 kernel supports long (axis {axis} is shorter)")
+                                  f"periodic axes at least {3 * LIST_SKIN:.2f} kernel supports "
+                                  f"({3 * LIST_SKIN * 2 * self.h:.4g} m) long; axis {axis} is shorter")
         for k, plane in enumerate(self.planes):
             normal = getattr(plane, "normal", None)
             try:

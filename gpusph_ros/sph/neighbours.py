@@ -11,6 +11,8 @@ import math
 import numpy as np
 import warp as wp
 
+from .config import LIST_SKIN
+
 
 class NeighbourOverflow(RuntimeError):
     """More neighbours than the list holds (particles clumped or the list is too narrow)."""
@@ -112,7 +114,7 @@ def build(scalar):
 class NeighbourList:
     """Owns the cell grid and the per-particle neighbour lists of one solver on one device."""
 
-    SKIN = 1.05  # list radius = SKIN x support: pairs that close in during the half step stay listed
+    SKIN = LIST_SKIN
 
     def __init__(self, scalar, dim: int, support: float, lo, hi, periodic, needs_list: np.ndarray,
                  max_neighbours: int, launcher):

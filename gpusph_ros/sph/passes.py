@@ -72,7 +72,7 @@ def build(scalar):
         rho_min: scalar
         rho_max: scalar
         cfl: scalar
-        dt_fixed: float
+        dt_fixed: wp.float64
         n_planes: int
 
     @wp.func
@@ -204,34 +204,38 @@ def build(scalar):
         xsph[i] = xs
 
     @wp.kernel(enable_backward=False, module="unique")
-    def choose_dt(p: Params, t_target: float, maxima: wp.array(dtype=scalar), fail: wp.array(dtype=wp.int32),
-                  clock: wp.array(dtype=float)):
-        """dt = CFL min(sqrt(h/|a|max), h/(c0 + h max|mu|), 0.125 h^2/nu) (Monaghan 1992; GPUSPH)."""
+    def choose_dt(p: Params, t_target: wp.float64, maxima: wp.array(dtype=scalar), fail: wp.array(dtype=wp.int32),
+                  clock: wp.array(dtype=wp.float64)):
+        """dt = CFL min(sqrt(h/|a|max), h/(c0 + h max|mu|), 0.125 h^2/nu) (Monaghan 1992; GPUSPH).
+
+        Time is float64 whatever the precision: a float32 clock cannot land on an output time.
+        """
         a_max = scalar(0.0)
         mu_max = scalar(0.0)
         for slot in range(maxima.shape[0] // 2):
             a_max = wp.max(a_max, maxima[2 * slot])
             mu_max = wp.max(mu_max, maxima[2 * slot + 1])
         dt = p.dt_fixed
-        if dt <= 0.0:
-            h = float(p.h)
-            dt = float(p.cfl) * h / (float(p.c0) + h * float(mu_max))
+        if dt <= wp.float64(0.0):
+            h = wp.float64(p.h)
+            cfl = wp.float64(p.cfl)
+            dt = cfl * h / (wp.float64(p.c0) + h * wp.float64(mu_max))
             if a_max > scalar(0.0):
-                dt = wp.min(dt, float(p.cfl) * wp.sqrt(h / float(a_max)))
+                dt = wp.min(dt, cfl * wp.sqrt(h / wp.float64(a_max)))
             if p.viscosity != ARTIFICIAL and p.nu > scalar(0.0):
-                dt = wp.min(dt, float(p.cfl) * 0.125 * h * h / float(p.nu))
+                dt = wp.min(dt, cfl * wp.float64(0.125) * h * h / wp.float64(p.nu))
         remaining = t_target - clock[0]
-        if remaining <= 1.0e-12 * wp.max(1.0, t_target):
-            dt = 0.0
+        if remaining <= wp.float64(1.0e-12) * wp.max(wp.float64(1.0), clock[0]):
+            dt = wp.float64(0.0)
         elif dt > remaining:
             dt = remaining
         for c in range(3):
             if fail[c] != NO_FAILURE:
-                dt = 0.0
+                dt = wp.float64(0.0)
         clock[1] = dt
 
     @wp.kernel(enable_backward=False, module="unique")
-    def integrate(p: Params, clock: wp.array(dtype=float), factor: scalar, pos: wp.array(dtype=vec),
+    def integrate(p: Params, clock: wp.array(dtype=wp.float64), factor: scalar, pos: wp.array(dtype=vec),
                   vel: wp.array(dtype=vec), rho: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
                   vel_rate: wp.array(dtype=vec), acc: wp.array(dtype=vec), drho: wp.array(dtype=scalar),
                   xsph: wp.array(dtype=vec), pos_out: wp.array(dtype=vec), vel_out: wp.array(dtype=vec),
@@ -283,10 +287,10 @@ def build(scalar):
             rho[i] = rho_new[i]
 
     @wp.kernel(enable_backward=False, module="unique")
-    def tick(fail: wp.array(dtype=wp.int32), clock: wp.array(dtype=float), steps: wp.array(dtype=wp.int32)):
+    def tick(fail: wp.array(dtype=wp.int32), clock: wp.array(dtype=wp.float64), steps: wp.array(dtype=wp.int32)):
         """Advance time and step count, or record when the first failing step would have ended."""
         if fail[0] == NO_FAILURE and fail[1] == NO_FAILURE and fail[2] == NO_FAILURE:
-            if clock[1] > 0.0:
+            if clock[1] > wp.float64(0.0):
                 clock[0] = clock[0] + clock[1]
                 steps[0] = steps[0] + 1
         elif steps[1] < 0:

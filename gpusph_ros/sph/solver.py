@@ -158,7 +158,7 @@ class Solver:
         self._plane_pt, self._plane_n = arr(np.asarray(pts, dtype=np.float64), v), arr(np.asarray(nrm), v)
         self._maxima = wp.zeros(2 * self.launch.threads, dtype=s, device=dev)  # |a|max, |mu|max per chunk
         self._fail = arr(np.full(3, passes.NO_FAILURE, dtype=np.int32), wp.int32)
-        self._clock = wp.zeros(4, dtype=float, device=dev)  # t, dt, -, time of a failed step
+        self._clock = wp.zeros(4, dtype=wp.float64, device=dev)  # t, dt, -, time of a failed step
         self._steps = arr(np.array([0, -1], dtype=np.int32), wp.int32)  # steps, failed step
         wp.launch(self._eos, dim=n, inputs=[self.params, self.rho, self.pressure], device=dev)
 
@@ -194,10 +194,16 @@ class Solver:
         self._launched += 1
         every = self.config.shepard_every
         if every and self._launched % every == 0:
-            nl = self.neighbours
-            self.launch(self._shepard, n, [p, nl.grid, nl.nbr, nl.count, self.pos, self.rho, self.mass, self.ptype,
-                                           self._rho_c])
-            wp.copy(self.rho, self._rho_c)
+            self.shepard_filter(rebuild=False)
+
+    def shepard_filter(self, rebuild: bool = True):
+        """Replace the fluid density by its Shepard average (thesis Eq. 2.28)."""
+        nl = self.neighbours
+        if rebuild:
+            nl.rebuild(self.pos)
+        self.launch(self._shepard, self.n, [self.params, nl.grid, nl.nbr, nl.count, self.pos, self.rho, self.mass,
+                                            self.ptype, self._rho_c])
+        wp.copy(self.rho, self._rho_c)
 
     def _sync(self):
         """Read the clock and the health flags; raise if a step failed."""
@@ -224,9 +230,12 @@ class Solver:
             batch = 1
             if self.dt > 0.0:
                 batch = int(min(_MAX_BATCH, max(1, 0.8 * (t_target - self.time) / self.dt)))
+            before = self.time
             for _ in range(batch):
                 self._launch_step(t_target)
             self._sync()
+            if self.time <= before:
+                raise RuntimeError(f"simulated time is stuck at {self.time!r} s short of {t_target!r} s")
         return self.time
 
     def step(self) -> float:
@@ -235,6 +244,18 @@ class Solver:
         self._launch_step(math.inf)
         self._sync()
         return self.time
+
+    # fields whose change needs new particles or new buffers: only a fresh Solver takes them
+    REBUILD_FIELDS = ("dim", "dx", "hdx", "boundary", "mk_beta", "precision", "device", "cpu_threads",
+                      "domain_lo", "domain_hi", "periodic", "planes")
+
+    def reconfigure(self, **changes):
+        """Change numerics that apply from the next step (cfl, dt_fixed, viscosity, ...)."""
+        needs_rebuild = sorted(set(changes) & set(self.REBUILD_FIELDS))
+        if needs_rebuild:
+            raise ValueError(f"{', '.join(needs_rebuild)}: changing this needs new particles; build a new solver")
+        self.config = self.config.replace(**changes).validate()
+        self.params = self._make_params()
 
     def clear_failure(self):
         """Forget a reported failure so the run can go on (e.g. after changing dt_fixed)."""

@@ -1,0 +1,46 @@
+"""Configuration validation: every bad field names itself, its value and what is allowed."""
+import pytest
+
+from gpusph_ros.sph import ConfigError, Plane, SolverConfig
+
+
+@pytest.mark.parametrize("field, value, allowed", [
+    ("kernel", "gauss", "quadratic, cubic_spline, wendland"),
+    ("viscosity", "none", "artificial, laminar, sps"),
+    ("boundary", "walls", "lennard_jones, monaghan_kajtar, dynamic"),
+    ("density_diffusion", "shepard", "none, delta"),
+    ("precision", "float16", "float32, float64"),
+    ("dim", 4, "2 or 3"),
+    ("cfl", 1.5, "(0, 1]"),
+    ("dx", -0.01, "> 0"),
+    ("hdx", 0.0, "> 0"),
+    ("shepard_every", -1, ">= 0"),
+    ("cpu_threads", 1.5, ">= 0"),
+    ("gravity", (0.0, 0.0), "3 finite numbers"),
+    ("dt_fixed", float("nan"), ">= 0"),
+])
+def test_bad_field_is_named_with_allowed_values(field, value, allowed):
+    with pytest.raises(ConfigError) as err:
+        SolverConfig(**{field: value}).validate()
+    assert err.value.field == field
+    assert repr(value) in str(err.value)
+    assert allowed in str(err.value)
+
+
+def test_defaults_are_valid_and_c0_follows_depth():
+    cfg = SolverConfig(depth=0.4, c0_coef=10.0).validate()
+    assert cfg.sound_speed == pytest.approx(10.0 * (9.81 * 0.4) ** 0.5)
+    assert cfg.replace(c0=30.0).sound_speed == 30.0
+    assert cfg.eos_b == pytest.approx(cfg.sound_speed ** 2 * 1000.0 / 7.0)
+    assert cfg.h == pytest.approx(1.3 * cfg.dx)
+
+
+def test_domain_periodic_and_planes_are_checked():
+    with pytest.raises(ConfigError, match="domain_hi"):
+        SolverConfig(domain_lo=(0, 0, 0), domain_hi=(1, 0, 1)).validate()
+    with pytest.raises(ConfigError, match="periodic"):
+        SolverConfig(dx=0.02, domain_hi=(0.1, 1, 1), periodic=(True, False, False)).validate()
+    with pytest.raises(ConfigError, match=r"planes\[0\]"):
+        SolverConfig(planes=[Plane(point=(0, 0, 0), normal=(0, 0, 0))]).validate()
+    with pytest.raises(ConfigError, match="gravity"):
+        SolverConfig(dim=2, gravity=(0, 0, -9.81)).validate()

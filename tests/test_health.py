@@ -1,0 +1,64 @@
+"""Health checks: a step far above the stable time step is caught before a NaN reaches the state,
+and the state from before the failing step is kept."""
+import numpy as np
+import pytest
+
+from gpusph_ros.scenes.boxes import box_tank
+from gpusph_ros.sph import HealthError, SolverConfig, Solver
+from gpusph_ros.sph.passes import CHECKS
+
+
+def column(**overrides):
+    a = 0.1
+    cfg = SolverConfig(dim=2, dx=a / 15, gravity=(0.0, -9.81, 0.0), depth=2 * a, **overrides)
+    return box_tank(cfg, (4 * a, 2.5 * a), [((0.0, 0.0), (a, 2 * a))])
+
+
+def test_reconfigure_refuses_what_needs_new_particles():
+    cfg, parts = column()
+    solver = Solver(cfg, parts)
+    with pytest.raises(ValueError, match="dx"):
+        solver.reconfigure(dx=0.001)
+    solver.reconfigure(cfl=0.2)
+    assert solver.config.cfl == 0.2
+
+
+def test_stable_dt_runs_clean():
+    cfg, parts = column()
+    solver = Solver(cfg, parts)
+    solver.advance(0.05)
+    snap = solver.snapshot()
+    assert np.isfinite(snap["pos"]).all() and np.isfinite(snap["rho"]).all()
+
+
+@pytest.mark.parametrize("factor", [20.0, 200.0])
+def test_unstable_dt_raises_and_keeps_the_last_healthy_state(factor):
+    cfg, parts = column()
+    stable = Solver(cfg, parts)
+    stable.step()
+    cfg_bad = cfg.replace(dt_fixed=factor * stable.dt)
+    solver = Solver(cfg_bad, parts)
+    before = solver.snapshot()
+    with pytest.raises(HealthError) as err:
+        for _ in range(200):
+            before = solver.snapshot()
+            steps_before, t_before = solver.steps, solver.time
+            solver.step()
+    e = err.value
+    assert e.check in CHECKS
+    assert e.step == steps_before + 1
+    assert e.time == pytest.approx(t_before + cfg_bad.dt_fixed)
+    assert 0 <= e.particle < solver.n
+    assert str(e.step) in str(e) and e.check in str(e)
+    after = solver.snapshot()
+    for key in ("pos", "vel", "rho"):
+        assert np.isfinite(after[key]).all()
+        np.testing.assert_array_equal(after[key], before[key])
+    assert solver.time == pytest.approx(t_before) and solver.steps == steps_before
+    # the failure stays reported until cleared; a caller can then go on with a sane step
+    with pytest.raises(HealthError):
+        solver.step()
+    solver.reconfigure(dt_fixed=0.0)
+    solver.clear_failure()
+    solver.step()
+    assert solver.steps == steps_before + 1
