@@ -18,22 +18,24 @@ def shared_dir() -> Path:
     return SHARED
 
 
-def hydrostatic_errors(snap: dict, dim: int, h: float, depth: float, rho0: float, g: float,
-                       fluid_lo, fluid_hi, bins=(0.2, 0.4, 0.6)) -> np.ndarray:
+def hydrostatic_errors(snap: dict, dim: int, h: float, depth: float, rho0: float, g: float, periodic,
+                       bins=(0.2, 0.4, 0.6)) -> np.ndarray:
     """p / (rho0 g d) - 1 in depth bins [b, b + 0.2] H, over fluid particles at least 3h from the
-    walls. The depth d is measured from the surface that the fluid's own volume (sum m / rho over
-    the footprint it occupies) sets, so that a sinking or spreading column is not counted as a
-    pressure error."""
+    walls and the floor. The depth d is measured from the free surface, half a particle spacing
+    above the mean height of the top layer of particles away from the walls (so that a column
+    that sinks or spreads a little is not counted as a pressure error)."""
     up = dim - 1
     f = snap["ptype"] == 0
     x, p = snap["pos"][f], snap["pressure"][f]
-    footprint = float(np.prod([fluid_hi[a] - fluid_lo[a] for a in range(dim - 1)]))
-    surface = (snap["mass"][f] / snap["rho"][f]).sum() / footprint
-    d = surface - x[:, up]
-    away = x[:, up] > 3 * h
+    dx = float((snap["mass"][f][0] / rho0) ** (1.0 / dim))
+    away = np.ones(len(x), dtype=bool)
     for a in range(dim - 1):
-        if fluid_lo[a] is not None:
-            away &= (x[:, a] > fluid_lo[a] + 3 * h) & (x[:, a] < fluid_hi[a] - 3 * h)
+        if not periodic[a]:
+            away &= (x[:, a] > x[:, a].min() + 3 * h) & (x[:, a] < x[:, a].max() - 3 * h)
+    top = x[away, up].max()
+    surface = x[away & (x[:, up] > top - 0.5 * dx), up].mean() + 0.5 * dx
+    d = surface - x[:, up]
+    away &= x[:, up] > 3 * h
     errors = []
     for b in bins:
         sel = away & (d > b * depth) & (d <= (b + 0.2) * depth)

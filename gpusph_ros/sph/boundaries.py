@@ -6,6 +6,9 @@
   f = K / beta r / r^2 W(q) 2 m_b / (m_a + m_b), K = g H, with W the 1D Wendland shape
   (1 - q/2)^4 (1 + 2q) normalised to W(0) = 1, so that f is an acceleration. Boundary particles
   are spaced dx / beta along a wall (default beta = 2), which smooths the summed force along it.
+  The paper is 2D, where K / beta keeps the force per unit wall length independent of beta; a 3D
+  wall holds beta^2 boundary particles per fluid particle's footprint, so 3D divides by beta^2
+  (``mk_beta_factor`` = beta^(dim - 1)) to keep the force per unit wall area the same.
   A fluid particle on the floor under a column of depth H settles where this force balances the
   missing half of its pressure gradient, about 0.8 dx from the boundary particles.
 - dynamic: Crespo et al. 2007 (the DualSPHysics default). Boundary particles obey the

@@ -66,6 +66,10 @@ class SolverConfig:
     gravity: tuple = (0.0, 0.0, -9.81)
     cfl: float = 0.3
     dt_fixed: float = 0.0  # > 0 forces this time step (tests, stability studies)
+    # settling: until settle_until [s], velocities relax with time constant settle_tau [s], so a
+    # tank started at rest reaches its discrete equilibrium without bouncing on its walls
+    settle_tau: float = 0.0
+    settle_until: float = 0.0
     precision: str = "float32"
     device: str = "cpu"
     cpu_threads: int = 0  # threads for the heavy passes on a CPU device; 0 = every core
@@ -130,7 +134,7 @@ class SolverConfig:
         choice("precision", PRECISIONS)
         for name in ("dx", "hdx", "rho0", "gamma", "depth", "cfl", "c0_coef", "xsph_eps", "mk_beta"):
             positive(name)
-        for name in ("alpha", "nu", "sps_cs", "sps_ci", "delta", "c0", "dt_fixed"):
+        for name in ("alpha", "nu", "sps_cs", "sps_ci", "delta", "c0", "dt_fixed", "settle_tau", "settle_until"):
             positive(name, strict=False)
         if self.mk_beta < 1.0:
             raise ConfigError("mk_beta", self.mk_beta, "a number >= 1 (boundary particles no sparser than fluid)")

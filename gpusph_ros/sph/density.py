@@ -26,11 +26,12 @@ def build(scalar):
 
     @wp.func
     def delta_diffusion(delta_hc0: scalar, rho_a: scalar, rho_b: scalar, m_b: scalar, r_ab: vec,
-                        grad: vec, eta2: scalar, gravity: vec, rho0: scalar, c0: scalar) -> scalar:
+                        grad: vec, r2_eta: scalar, gravity: vec, rho0: scalar, c0: scalar) -> scalar:
+        """``r2_eta`` = r^2 + 0.01 h^2."""
         # hydrostatic density difference rho^H_b - rho^H_a for b at r_b = r_a - r_ab, the Tait law
         # linearised (Fourtakas et al. 2019): rho0 g.(r_b - r_a) / c0^2
         rho_h = rho0 * wp.dot(gravity, -r_ab) / (c0 * c0)
-        psi = scalar(2.0) * ((rho_b - rho_a) - rho_h) * wp.dot(-r_ab, grad) / (wp.dot(r_ab, r_ab) + eta2)
+        psi = scalar(2.0) * ((rho_b - rho_a) - rho_h) * wp.dot(-r_ab, grad) / r2_eta
         return delta_hc0 * psi * m_b / rho_b
 
     return continuity, delta_diffusion

@@ -73,38 +73,63 @@ def build(scalar):
         rho_max: scalar
         cfl: scalar
         dt_fixed: wp.float64
+        settle_tau: wp.float64  # velocity relaxation time while settling; 0 = off
+        settle_until: wp.float64
         n_planes: int
 
+    @wp.struct
+    class Fields:
+        """One particle state (the committed one or the half step) and what every pass reads."""
+
+        pos: wp.array(dtype=vec)
+        vel: wp.array(dtype=vec)
+        rho: wp.array(dtype=scalar)
+        pressure: wp.array(dtype=scalar)
+        p_rho2: wp.array(dtype=scalar)  # p / rho^2, once per particle instead of once per pair
+        mass: wp.array(dtype=scalar)
+        ptype: wp.array(dtype=wp.int32)
+        body: wp.array(dtype=wp.int32)
+        tau_diag: wp.array(dtype=vec)  # SPS stress / rho: xx, yy, zz
+        tau_off: wp.array(dtype=vec)  # xy, xz, yz
+
     @wp.func
-    def pair(p: Params, r_ab: vec, u_ab: vec, rho_a: scalar, p_a: scalar, m_a: scalar, td_a: vec, to_a: vec,
-             rho_b: scalar, p_b: scalar, m_b: scalar, t_b: int, td_b: vec, to_b: vec):
-        """What particle b does to fluid particle a: (acceleration, drho/dt, XSPH velocity, |mu|)."""
+    def pair(p: Params, f: Fields, a: int, b: int, r_ab: vec):
+        """What particle b does to fluid particle a: (acceleration, drho/dt, XSPH velocity, |mu|).
+
+        Only the fields a model needs are loaded: the pair loop is where the time goes.
+        """
         zero = vec(scalar(0.0))
         r = wp.length(r_ab)
         if r >= scalar(2.0) * p.h:
             return zero, scalar(0.0), zero, scalar(0.0)
+        t_b = f.ptype[b]
         if t_b == BOUNDARY and p.boundary != DYNAMIC:
             if p.boundary == LENNARD_JONES:
                 return lennard_jones(p.lj_d, p.lj_r0, r_ab, r), scalar(0.0), zero, scalar(0.0)
-            return monaghan_kajtar(p.mk_k, p.mk_beta, p.inv_h, m_a, m_b, r_ab, r), scalar(0.0), zero, scalar(0.0)
+            return (monaghan_kajtar(p.mk_k, p.mk_beta, p.inv_h, f.mass[a], f.mass[b], r_ab, r), scalar(0.0), zero,
+                    scalar(0.0))
+        m_b = f.mass[b]
+        rho_a = f.rho[a]
+        rho_b = f.rho[b]
+        u_ab = f.vel[a] - f.vel[b]
         grad = r_ab * grad_factor(p.kernel, p.norm, p.inv_h, r)
+        r2_eta = wp.dot(r_ab, r_ab) + p.eta2
         drho = continuity(m_b, u_ab, grad)
         if t_b == FLUID and p.delta_hc0 > scalar(0.0):
-            drho += delta_diffusion(p.delta_hc0, rho_a, rho_b, m_b, r_ab, grad, p.eta2, p.gravity, p.rho0,
-                                    p.c0)
-        acc = -m_b * (p_a / (rho_a * rho_a) + p_b / (rho_b * rho_b)) * grad
+            drho += delta_diffusion(p.delta_hc0, rho_a, rho_b, m_b, r_ab, grad, r2_eta, p.gravity, p.rho0, p.c0)
+        acc = -m_b * (f.p_rho2[a] + f.p_rho2[b]) * grad
         if p.viscosity == ARTIFICIAL:
             # c0 for the mean sound speed, as GPUSPH: weak compressibility keeps c within ~1% of c0
-            acc += visc_artificial(p.alpha, p.h, p.c0, scalar(0.5) * (rho_a + rho_b), m_b, u_ab, r_ab,
-                                   p.eta2, grad)
+            acc += visc_artificial(p.alpha, p.h, p.c0, scalar(0.5) * (rho_a + rho_b), m_b, u_ab, r_ab, r2_eta,
+                                   grad)
         else:
-            acc += visc_laminar(p.nu, rho_a, rho_b, m_b, u_ab, r_ab, p.eta2, grad)
+            acc += visc_laminar(p.nu, rho_a, rho_b, m_b, u_ab, r_ab, r2_eta, grad)
             if p.viscosity == SPS and t_b == FLUID:
-                acc += sps_accel(m_b, rho_a, rho_b, td_a, to_a, td_b, to_b, grad)
+                acc += sps_accel(m_b, rho_a, rho_b, f.tau_diag[a], f.tau_off[a], f.tau_diag[b], f.tau_off[b], grad)
         xsph = zero
         if t_b == FLUID and p.xsph_eps > scalar(0.0):
             xsph = -p.xsph_eps * m_b / (scalar(0.5) * (rho_a + rho_b)) * kernel_w(p.kernel, p.norm, p.inv_h, r) * u_ab
-        mu = wp.abs(wp.dot(u_ab, r_ab)) / (r * r + p.eta2)
+        mu = wp.abs(wp.dot(u_ab, r_ab)) / r2_eta
         return acc, drho, xsph, mu
 
     @wp.func
@@ -114,91 +139,86 @@ def build(scalar):
             wp.atomic_max(maxima, k, value)
 
     @wp.kernel(enable_backward=False, module="unique")
-    def equation_of_state(p: Params, rho: wp.array(dtype=scalar), pressure: wp.array(dtype=scalar)):
+    def equation_of_state(p: Params, f: Fields):
         i = wp.tid()
-        pressure[i] = eos_pressure(rho[i], p.rho0, p.eos_b, p.gamma)
+        r = f.rho[i]
+        pr = eos_pressure(r, p.rho0, p.eos_b, p.gamma)
+        f.pressure[i] = pr
+        f.p_rho2[i] = pr / (r * r)
 
     @wp.kernel(enable_backward=False, module="unique")
     def sps_strain(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32),
-                   pos: wp.array(dtype=vec), vel: wp.array(dtype=vec), rho: wp.array(dtype=scalar),
-                   mass: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
-                   tau_diag: wp.array(dtype=vec), tau_off: wp.array(dtype=vec), chunk: int, stride: int):
+                   f: Fields, chunk: int, stride: int):
         i = wp.tid() * stride + chunk
         zero = vec(scalar(0.0))
-        if ptype[i] != FLUID:
-            tau_diag[i] = zero
-            tau_off[i] = zero
+        if f.ptype[i] != FLUID:
+            f.tau_diag[i] = zero
+            f.tau_off[i] = zero
             return
         grad_u = mat33(scalar(0.0))
         base = i * grid.max_neighbours
         for k in range(count[i]):
             j = nbr[base + k]
-            if ptype[j] == FLUID or p.boundary == DYNAMIC:
-                r_ab = separation(grid, pos[i], pos[j])
+            if f.ptype[j] == FLUID or p.boundary == DYNAMIC:
+                r_ab = separation(grid, f.pos[i], f.pos[j])
                 r = wp.length(r_ab)
                 if r < scalar(2.0) * p.h:
                     grad = r_ab * grad_factor(p.kernel, p.norm, p.inv_h, r)
-                    grad_u += mass[j] / rho[j] * wp.outer(vel[j] - vel[i], grad)
+                    grad_u += f.mass[j] / f.rho[j] * wp.outer(f.vel[j] - f.vel[i], grad)
         d, o = sps_stress(grad_u, p.cs_dl2, p.ci_dl2)
-        tau_diag[i] = d
-        tau_off[i] = o
+        f.tau_diag[i] = d
+        f.tau_off[i] = o
 
     @wp.kernel(enable_backward=False, module="unique")
-    def interact(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32),
-                 pos: wp.array(dtype=vec), vel: wp.array(dtype=vec), rho: wp.array(dtype=scalar),
-                 pressure: wp.array(dtype=scalar), mass: wp.array(dtype=scalar),
-                 ptype: wp.array(dtype=wp.int32), body: wp.array(dtype=wp.int32),
-                 tau_diag: wp.array(dtype=vec), tau_off: wp.array(dtype=vec),
+    def interact(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32), f: Fields,
                  plane_point: wp.array(dtype=vec), plane_normal: wp.array(dtype=vec),
                  acc: wp.array(dtype=vec), drho: wp.array(dtype=scalar), xsph: wp.array(dtype=vec),
                  maxima: wp.array(dtype=scalar), chunk: int, stride: int):
         i = wp.tid() * stride + chunk
-        xi = pos[i]
-        ui = vel[i]
-        rho_i = rho[i]
-        p_i = pressure[i]
-        m_i = mass[i]
+        xi = f.pos[i]
         base = i * grid.max_neighbours
         a = vec(scalar(0.0))
         dr = scalar(0.0)
         xs = vec(scalar(0.0))
-        if ptype[i] == FLUID:
+        if f.ptype[i] == FLUID:
             a = p.gravity
             mu_max = scalar(0.0)
             for k in range(count[i]):
                 j = nbr[base + k]
-                da, ddr, dxs, mu = pair(p, separation(grid, xi, pos[j]), ui - vel[j], rho_i, p_i, m_i,
-                                        tau_diag[i], tau_off[i], rho[j], pressure[j], mass[j], ptype[j],
-                                        tau_diag[j], tau_off[j])
+                da, ddr, dxs, mu = pair(p, f, i, j, separation(grid, xi, f.pos[j]))
                 a += da
                 dr += ddr
                 xs += dxs
                 mu_max = wp.max(mu_max, mu)
-            for k in range(p.n_planes):
-                n_k = plane_normal[k]
-                d = wp.dot(xi - plane_point[k], n_k)
-                flux = plane_kernel_flux(p.kernel, p.norm, p.inv_h, p.dim, d)
-                if flux > scalar(0.0):
-                    a += scalar(2.0) * wp.max(p_i, scalar(0.0)) / rho_i * flux * n_k
-                    dr -= scalar(2.0) * rho_i * wp.dot(ui, n_k) * flux
-                    a += lennard_jones(p.lj_d, p.plane_r0, d * n_k, d)
+            if p.n_planes > 0:
+                ui = f.vel[i]
+                rho_i = f.rho[i]
+                p_i = wp.max(f.pressure[i], scalar(0.0))
+                for k in range(p.n_planes):
+                    n_k = plane_normal[k]
+                    d = wp.dot(xi - plane_point[k], n_k)
+                    flux = plane_kernel_flux(p.kernel, p.norm, p.inv_h, p.dim, d)
+                    if flux > scalar(0.0):
+                        a += scalar(2.0) * p_i / rho_i * flux * n_k
+                        dr -= scalar(2.0) * rho_i * wp.dot(ui, n_k) * flux
+                        a += lennard_jones(p.lj_d, p.plane_r0, d * n_k, d)
             track_max(maxima, 2 * chunk, wp.length(a))
             track_max(maxima, 2 * chunk + 1, mu_max)
         else:
             # a boundary particle: density (dynamic boundaries) and, on a body, the reaction
             # of every fluid neighbour, so that mass x acc sums to the force on the body
+            ui = f.vel[i]
             for k in range(count[i]):
                 j = nbr[base + k]
-                if ptype[j] == FLUID:
-                    r_ji = separation(grid, pos[j], xi)
-                    if p.boundary == DYNAMIC and wp.length(r_ji) < scalar(2.0) * p.h:
-                        grad = -r_ji * grad_factor(p.kernel, p.norm, p.inv_h, wp.length(r_ji))
-                        dr += continuity(mass[j], ui - vel[j], grad)
-                    if body[i] >= 0:
-                        da, ddr, dxs, mu = pair(p, r_ji, vel[j] - ui, rho[j], pressure[j], mass[j],
-                                                tau_diag[j], tau_off[j], rho_i, p_i, m_i, BOUNDARY,
-                                                tau_diag[i], tau_off[i])
-                        a -= mass[j] / m_i * da
+                if f.ptype[j] == FLUID:
+                    r_ji = separation(grid, f.pos[j], xi)
+                    r = wp.length(r_ji)
+                    if p.boundary == DYNAMIC and r < scalar(2.0) * p.h:
+                        grad = -r_ji * grad_factor(p.kernel, p.norm, p.inv_h, r)
+                        dr += continuity(f.mass[j], ui - f.vel[j], grad)
+                    if f.body[i] >= 0:
+                        da, ddr, dxs, mu = pair(p, f, j, i, r_ji)
+                        a -= f.mass[j] / f.mass[i] * da
         acc[i] = a
         drho[i] = dr
         xsph[i] = xs
@@ -258,7 +278,10 @@ def build(scalar):
                 span = p.hi[ax] - p.lo[ax]
                 x[ax] = x[ax] - span * wp.floor((x[ax] - p.lo[ax]) / span)
         pos_out[i] = x
-        vel_out[i] = vel[i] + dt * acc[i]
+        u = vel[i] + dt * acc[i]
+        if p.settle_tau > wp.float64(0.0) and clock[0] < p.settle_until:
+            u = u / (scalar(1.0) + dt / scalar(p.settle_tau))
+        vel_out[i] = u
 
     @wp.kernel(enable_backward=False, module="unique")
     def health(p: Params, pos: wp.array(dtype=vec), vel: wp.array(dtype=vec), rho: wp.array(dtype=scalar),
@@ -298,24 +321,24 @@ def build(scalar):
             clock[3] = clock[0] + clock[1]
 
     @wp.kernel(enable_backward=False, module="unique")
-    def shepard(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32),
-                pos: wp.array(dtype=vec), rho: wp.array(dtype=scalar), mass: wp.array(dtype=scalar),
-                ptype: wp.array(dtype=wp.int32), rho_out: wp.array(dtype=scalar), chunk: int, stride: int):
+    def shepard(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32), f: Fields,
+                rho_out: wp.array(dtype=scalar), chunk: int, stride: int):
         """rho_a = sum_b m_b W_ab / sum_b (m_b / rho_b) W_ab, the particle itself included (Eq. 2.28)."""
         i = wp.tid() * stride + chunk
-        if ptype[i] != FLUID:
-            rho_out[i] = rho[i]
+        if f.ptype[i] != FLUID:
+            rho_out[i] = f.rho[i]
             return
         w0 = kernel_w(p.kernel, p.norm, p.inv_h, scalar(0.0))
-        num = mass[i] * w0
-        den = mass[i] / rho[i] * w0
+        num = f.mass[i] * w0
+        den = f.mass[i] / f.rho[i] * w0
         base = i * grid.max_neighbours
         for k in range(count[i]):
             j = nbr[base + k]
-            if ptype[j] == FLUID or p.boundary == DYNAMIC:
-                wk = kernel_w(p.kernel, p.norm, p.inv_h, wp.length(separation(grid, pos[i], pos[j])))
-                num += mass[j] * wk
-                den += mass[j] / rho[j] * wk
+            if f.ptype[j] == FLUID or p.boundary == DYNAMIC:
+                wk = kernel_w(p.kernel, p.norm, p.inv_h, wp.length(separation(grid, f.pos[i], f.pos[j])))
+                num += f.mass[j] * wk
+                den += f.mass[j] / f.rho[j] * wk
         rho_out[i] = num / den
 
-    return Params, equation_of_state, sps_strain, interact, choose_dt, integrate, health, commit, tick, shepard
+    return (Params, Fields, equation_of_state, sps_strain, interact, choose_dt, integrate, health, commit, tick,
+            shepard)

@@ -79,7 +79,7 @@ class Solver:
         self.n = len(particles)
         if self.n == 0:
             raise ValueError("particles: the particle set is empty")
-        (self._Params, self._eos, self._sps, self._interact, self._choose_dt, self._integrate,
+        (self._Params, self._Fields, self._eos, self._sps, self._interact, self._choose_dt, self._integrate,
          self._health, self._commit, self._tick, self._shepard) = passes.build(self.scalar)
         self.params = self._make_params()
         self.launch = Launcher(self.device, cfg.cpu_threads)
@@ -113,7 +113,7 @@ class Solver:
         p.lj_d = 5.0 * g * cfg.depth
         p.lj_r0 = cfg.dx
         p.mk_k = g * cfg.depth
-        p.mk_beta = cfg.mk_beta
+        p.mk_beta = cfg.mk_beta ** (cfg.dim - 1)  # see boundaries: force per unit wall area
         p.plane_r0 = 0.5 * cfg.dx
         p.delta_hc0 = (cfg.delta * cfg.h * cfg.sound_speed
                        if density.DENSITY_DIFFUSION_ID[cfg.density_diffusion] else 0.0)
@@ -130,6 +130,8 @@ class Solver:
         p.rho_max = cfg.rho_max_ratio * cfg.rho0
         p.cfl = cfg.cfl
         p.dt_fixed = cfg.dt_fixed
+        p.settle_tau = cfg.settle_tau
+        p.settle_until = cfg.settle_until
         p.n_planes = len(cfg.planes)
         return p
 
@@ -146,12 +148,16 @@ class Solver:
         self.ptype = arr(particles.ptype, wp.int32)
         self.body = arr(particles.body, wp.int32)
         self.pressure = wp.zeros(n, dtype=s, device=dev)
-        # half-step and candidate states, rates of change, SPS stress (tau / rho)
+        # half-step and candidate states, rates of change
         self._pos_h, self._vel_h, self._rho_h = wp.zeros_like(self.pos), wp.zeros_like(self.vel), wp.zeros_like(self.rho)
         self._pos_c, self._vel_c, self._rho_c = wp.zeros_like(self.pos), wp.zeros_like(self.vel), wp.zeros_like(self.rho)
         self.acc, self._xsph = wp.zeros(n, dtype=v, device=dev), wp.zeros(n, dtype=v, device=dev)
         self._drho = wp.zeros(n, dtype=s, device=dev)
-        self._tau_d, self._tau_o = wp.zeros(n, dtype=v, device=dev), wp.zeros(n, dtype=v, device=dev)
+        shared = dict(pressure=self.pressure, p_rho2=wp.zeros(n, dtype=s, device=dev), mass=self.mass,
+                      ptype=self.ptype, body=self.body, tau_diag=wp.zeros(n, dtype=v, device=dev),
+                      tau_off=wp.zeros(n, dtype=v, device=dev))
+        self._fields = self._make_fields(self.pos, self.vel, self.rho, shared)
+        self._fields_h = self._make_fields(self._pos_h, self._vel_h, self._rho_h, shared)
         planes = cfg.planes or []
         pts = [p.point for p in planes] or [(0.0, 0.0, 0.0)]
         nrm = [np.asarray(p.normal, dtype=np.float64) / np.linalg.norm(p.normal) for p in planes] or [(0.0, 0.0, 1.0)]
@@ -160,29 +166,34 @@ class Solver:
         self._fail = arr(np.full(3, passes.NO_FAILURE, dtype=np.int32), wp.int32)
         self._clock = wp.zeros(4, dtype=wp.float64, device=dev)  # t, dt, -, time of a failed step
         self._steps = arr(np.array([0, -1], dtype=np.int32), wp.int32)  # steps, failed step
-        wp.launch(self._eos, dim=n, inputs=[self.params, self.rho, self.pressure], device=dev)
+        wp.launch(self._eos, dim=n, inputs=[self.params, self._fields], device=dev)
+
+    def _make_fields(self, pos, vel, rho, shared: dict):
+        f = self._Fields()
+        f.pos, f.vel, f.rho = pos, vel, rho
+        for name, array in shared.items():
+            setattr(f, name, array)
+        return f
 
     # -- stepping -----------------------------------------------------------------------
-    def _forces(self, pos, vel, rho):
-        n, dev, p, nl = self.n, self.device, self.params, self.neighbours
-        wp.launch(self._eos, dim=n, inputs=[p, rho, self.pressure], device=dev)
+    def _forces(self, f):
+        n, p, nl = self.n, self.params, self.neighbours
+        wp.launch(self._eos, dim=n, inputs=[p, f], device=self.device)
         if self.config.viscosity == "sps":
-            self.launch(self._sps, n, [p, nl.grid, nl.nbr, nl.count, pos, vel, rho, self.mass, self.ptype,
-                                       self._tau_d, self._tau_o])
-        self.launch(self._interact, n, [p, nl.grid, nl.nbr, nl.count, pos, vel, rho, self.pressure, self.mass,
-                                        self.ptype, self.body, self._tau_d, self._tau_o, self._plane_pt,
-                                        self._plane_n, self.acc, self._drho, self._xsph, self._maxima])
+            self.launch(self._sps, n, [p, nl.grid, nl.nbr, nl.count, f])
+        self.launch(self._interact, n, [p, nl.grid, nl.nbr, nl.count, f, self._plane_pt, self._plane_n, self.acc,
+                                        self._drho, self._xsph, self._maxima])
 
     def _launch_step(self, t_target: float):
         n, dev, p = self.n, self.device, self.params
         self.neighbours.rebuild(self.pos)
         self._maxima.zero_()
-        self._forces(self.pos, self.vel, self.rho)
+        self._forces(self._fields)
         wp.launch(self._choose_dt, dim=1, inputs=[p, t_target, self._maxima, self._fail, self._clock], device=dev)
         wp.launch(self._integrate, dim=n,
                   inputs=[p, self._clock, 0.5, self.pos, self.vel, self.rho, self.ptype, self.vel, self.acc,
                           self._drho, self._xsph, self._pos_h, self._vel_h, self._rho_h], device=dev)
-        self._forces(self._pos_h, self._vel_h, self._rho_h)
+        self._forces(self._fields_h)
         wp.launch(self._integrate, dim=n,
                   inputs=[p, self._clock, 1.0, self.pos, self.vel, self.rho, self.ptype, self._vel_h, self.acc,
                           self._drho, self._xsph, self._pos_c, self._vel_c, self._rho_c], device=dev)
@@ -201,8 +212,7 @@ class Solver:
         nl = self.neighbours
         if rebuild:
             nl.rebuild(self.pos)
-        self.launch(self._shepard, self.n, [self.params, nl.grid, nl.nbr, nl.count, self.pos, self.rho, self.mass,
-                                            self.ptype, self._rho_c])
+        self.launch(self._shepard, self.n, [self.params, nl.grid, nl.nbr, nl.count, self._fields, self._rho_c])
         wp.copy(self.rho, self._rho_c)
 
     def _sync(self):
@@ -266,7 +276,7 @@ class Solver:
     # -- state out ------------------------------------------------------------------------
     def snapshot(self) -> dict:
         """Host copies of the state: pos, vel (n x 3), rho, pressure, mass (n), ptype, body (n)."""
-        wp.launch(self._eos, dim=self.n, inputs=[self.params, self.rho, self.pressure], device=self.device)
+        wp.launch(self._eos, dim=self.n, inputs=[self.params, self._fields], device=self.device)
         return {
             "pos": self.pos.numpy().astype(np.float64),
             "vel": self.vel.numpy().astype(np.float64),

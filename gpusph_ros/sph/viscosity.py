@@ -22,18 +22,20 @@ def build(scalar):
 
     @wp.func
     def artificial(alpha: scalar, h: scalar, c_mean: scalar, rho_mean: scalar, m_b: scalar,
-                   u_ab: vec, r_ab: vec, eta2: scalar, grad: vec) -> vec:
+                   u_ab: vec, r_ab: vec, r2_eta: scalar, grad: vec) -> vec:
+        """``r2_eta`` = r^2 + 0.01 h^2."""
         vr = wp.dot(u_ab, r_ab)
         if vr >= scalar(0.0):
             return vec(scalar(0.0))
-        mu = h * vr / (wp.dot(r_ab, r_ab) + eta2)
+        mu = h * vr / r2_eta
         pi_ab = -alpha * c_mean * mu / rho_mean
         return -m_b * pi_ab * grad
 
     @wp.func
     def laminar(nu: scalar, rho_a: scalar, rho_b: scalar, m_b: scalar, u_ab: vec, r_ab: vec,
-                eta2: scalar, grad: vec) -> vec:
-        return m_b * scalar(4.0) * nu * wp.dot(r_ab, grad) / ((rho_a + rho_b) * (wp.dot(r_ab, r_ab) + eta2)) * u_ab
+                r2_eta: scalar, grad: vec) -> vec:
+        """``r2_eta`` = r^2 + 0.01 h^2."""
+        return m_b * scalar(4.0) * nu * wp.dot(r_ab, grad) / ((rho_a + rho_b) * r2_eta) * u_ab
 
     @wp.func
     def sps_stress(grad_u: wp.types.matrix((3, 3), scalar), cs_dl2: scalar, ci_dl2: scalar):

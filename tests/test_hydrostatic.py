@@ -1,0 +1,68 @@
+"""Hydrostatic tank, 2D and 3D, for each boundary type: after settling, the pressure at depth d is
+rho0 g d within 5% away from walls; no fluid particle crosses a wall; the fluid keeps its mass and
+its volume (sum m / rho) within 1%.
+
+Settling: for the first 0.4 s velocities relax with a 0.02 s time constant, so that a column on
+force-based walls (which bounces on them like a spring) comes to rest; then the tank runs free
+for 0.2 s and the pressure is averaged over 10 samples in the last 0.4 s.
+
+Reference: hydrostatics, p = rho0 g d. Walls: Crespo et al. 2007 (dynamic), Monaghan 1994
+(Lennard-Jones), Monaghan & Kajtar 2009, particle-less planes.
+"""
+import numpy as np
+import pytest
+
+from conftest import hydrostatic_errors
+from gpusph_ros.scenes.boxes import box_tank
+from gpusph_ros.sph import Solver, SolverConfig
+
+DX = 0.01
+SETTLE_UNTIL, SETTLE_TAU = 0.4, 0.02
+START, END, SAMPLES = 0.6, 1.0, 10
+
+
+def tank(dim, boundary, walls, precision):
+    if dim == 2:
+        depth, size, g, periodic = 0.2, (0.3, 0.24), (0.0, -9.81, 0.0), (False, False, False)
+    else:
+        # periodic across y: a 3D tank whose interior lies 3h from every wall stays small
+        depth, size, g, periodic = 0.15, (0.2, 0.09, 0.18), (0.0, 0.0, -9.81), (False, True, False)
+    fluid = ((0.0,) * dim, size[:dim - 1] + (depth,))
+    cfg = SolverConfig(dim=dim, dx=DX, gravity=g, depth=depth, boundary=boundary, precision=precision,
+                       periodic=periodic, settle_tau=SETTLE_TAU, settle_until=SETTLE_UNTIL)
+    cfg, parts = box_tank(cfg, size, [fluid], walls=walls)
+    return cfg, parts, depth, size
+
+
+CASES = [(dim, boundary, "particles", "float32") for dim in (2, 3)
+         for boundary in ("dynamic", "lennard_jones", "monaghan_kajtar")]
+CASES += [(2, "dynamic", "planes", "float32"), (3, "dynamic", "planes", "float32"),
+          (2, "dynamic", "particles", "float64")]
+
+
+@pytest.mark.parametrize("dim, boundary, walls, precision", CASES)
+def test_hydrostatic_pressure(dim, boundary, walls, precision):
+    cfg, parts, depth, size = tank(dim, boundary, walls, precision)
+    solver = Solver(cfg, parts)
+    fluid = parts.ptype == 0
+    volume0 = (parts.mass[fluid] / parts.rho[fluid]).sum()
+    solver.advance(START)
+    errors = []
+    for t in np.linspace(START, END, SAMPLES + 1)[1:]:
+        solver.advance(float(t))
+        snap = solver.snapshot()
+        x = snap["pos"][snap["ptype"] == 0]
+        # no fluid particle crosses a wall (walls stand at 0 and at the tank's sides)
+        assert x[:, dim - 1].min() > 0.0
+        for ax in range(dim - 1):
+            if not cfg.periodic[ax]:
+                assert x[:, ax].min() > 0.0 and x[:, ax].max() < size[ax]
+        errors.append(hydrostatic_errors(snap, dim, cfg.h, depth, cfg.rho0, cfg.g_norm, cfg.periodic))
+    errors = np.mean(errors, axis=0)
+    print(f"\n{dim}D {boundary} {walls} {precision}: p / (rho0 g d) - 1 at depths 0.2-0.4, 0.4-0.6, "
+          f"0.6-0.8 H: " + ", ".join(f"{100 * e:+.1f}%" for e in errors))
+    assert np.all(np.abs(errors) < 0.05), errors
+    f = snap["ptype"] == 0
+    assert f.sum() == fluid.sum()
+    assert snap["mass"][f].sum() == pytest.approx(parts.mass[fluid].sum(), rel=1e-6)  # float32 storage
+    assert (snap["mass"][f] / snap["rho"][f]).sum() == pytest.approx(volume0, rel=0.01)
