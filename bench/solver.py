@@ -30,7 +30,7 @@ def measure(dx: float, precision: str, device: str, seconds: float, warmup_steps
     steps0 = solver.steps
     # advance in short simulated slices until the wall-clock budget is spent
     while time.perf_counter() - start < seconds:
-        solver.advance(solver.time + 20 * solver.dt)
+        solver.advance(solver.time + 20 * solver.dt_stable)
     wp.synchronize_device(solver.device)
     wall = time.perf_counter() - start
     steps = solver.steps - steps0

@@ -16,8 +16,9 @@ BOUNDARIES = ("lennard_jones", "monaghan_kajtar", "dynamic")
 DENSITY_DIFFUSIONS = ("none", "delta")
 PRECISIONS = ("float32", "float64")
 
-# neighbour lists reach LIST_SKIN kernel supports, so pairs closing in during a half step stay listed
-LIST_SKIN = 1.05
+# neighbour lists reach LIST_SKIN kernel supports; a list stays valid until some particle has moved
+# half the difference since it was built (a Verlet list)
+LIST_SKIN = 1.1
 
 
 class ConfigError(ValueError):

@@ -38,7 +38,7 @@ def build(scalar):
     visc_artificial, visc_laminar, sps_stress, sps_accel = viscosity.build(scalar)
     continuity, delta_diffusion = density.build(scalar)
     lennard_jones, monaghan_kajtar, plane_kernel_flux = boundaries.build(scalar)
-    Grid, separation, _, _, _ = neighbours.build(scalar)
+    Grid, separation, *_ = neighbours.build(scalar)
 
     @wp.struct
     class Params:
@@ -244,6 +244,7 @@ def build(scalar):
                 dt = wp.min(dt, cfl * wp.sqrt(h / wp.float64(a_max)))
             if p.viscosity != ARTIFICIAL and p.nu > scalar(0.0):
                 dt = wp.min(dt, cfl * wp.float64(0.125) * h * h / wp.float64(p.nu))
+        clock[2] = dt  # the step the stability limits allow, before landing on t_target
         remaining = t_target - clock[0]
         if remaining <= wp.float64(1.0e-12) * wp.max(wp.float64(1.0), clock[0]):
             dt = wp.float64(0.0)

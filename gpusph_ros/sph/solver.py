@@ -60,11 +60,12 @@ class Particles:
         return len(self.pos)
 
 
-def default_max_neighbours(dim: int, hdx: float, mk_beta: float = 1.0) -> int:
-    """Room for 2.5x the neighbours of a uniform lattice (plus finer boundary layers)."""
+def default_max_neighbours(dim: int, hdx: float) -> int:
+    """Room for 2.5x the neighbours of a uniform lattice (a wall of finer boundary particles adds
+    fewer than the half-support of fluid it replaces)."""
     radius = NeighbourList.SKIN * 2.0 * hdx
     expected = (4.0 / 3.0 * math.pi * radius ** 3) if dim == 3 else (math.pi * radius ** 2)
-    return int(8 * math.ceil(2.5 * expected * max(1.0, mk_beta) / 8))
+    return int(8 * math.ceil(2.5 * expected / 8))
 
 
 class Solver:
@@ -86,12 +87,12 @@ class Solver:
         # boundary particles need their own list only to update their density or sum a body force
         needs_list = (particles.ptype == FLUID) | (particles.body >= 0) | (cfg.boundary == "dynamic")
         self.neighbours = NeighbourList(self.scalar, cfg.dim, 2.0 * cfg.h, cfg.domain_lo, cfg.domain_hi,
-                                        cfg.periodic, needs_list,
-                                        max_neighbours or default_max_neighbours(cfg.dim, cfg.hdx, cfg.mk_beta),
+                                        cfg.periodic, particles.ptype, needs_list,
+                                        max_neighbours or default_max_neighbours(cfg.dim, cfg.hdx),
                                         self.launch)
         self._allocate(particles)
         self._launched = 0
-        self.time, self.dt, self.steps = 0.0, 0.0, 0
+        self.time, self.dt, self.dt_stable, self.steps = 0.0, 0.0, 0.0, 0
 
     # -- set-up -------------------------------------------------------------------------
     def _make_params(self):
@@ -164,7 +165,7 @@ class Solver:
         self._plane_pt, self._plane_n = arr(np.asarray(pts, dtype=np.float64), v), arr(np.asarray(nrm), v)
         self._maxima = wp.zeros(2 * self.launch.threads, dtype=s, device=dev)  # |a|max, |mu|max per chunk
         self._fail = arr(np.full(3, passes.NO_FAILURE, dtype=np.int32), wp.int32)
-        self._clock = wp.zeros(4, dtype=wp.float64, device=dev)  # t, dt, -, time of a failed step
+        self._clock = wp.zeros(4, dtype=wp.float64, device=dev)  # t, dt, stable dt, time of a failed step
         self._steps = arr(np.array([0, -1], dtype=np.int32), wp.int32)  # steps, failed step
         wp.launch(self._eos, dim=n, inputs=[self.params, self._fields], device=dev)
 
@@ -202,6 +203,7 @@ class Solver:
         wp.launch(self._commit, dim=n, inputs=[self._fail, self._pos_c, self._vel_c, self._rho_c, self.pos,
                                                self.vel, self.rho], device=dev)
         wp.launch(self._tick, dim=1, inputs=[self._fail, self._clock, self._steps], device=dev)
+        self.neighbours.moved(self.pos)
         self._launched += 1
         every = self.config.shepard_every
         if every and self._launched % every == 0:
@@ -211,7 +213,7 @@ class Solver:
         """Replace the fluid density by its Shepard average (thesis Eq. 2.28)."""
         nl = self.neighbours
         if rebuild:
-            nl.rebuild(self.pos)
+            nl.rebuild(self.pos, force=True)
         self.launch(self._shepard, self.n, [self.params, nl.grid, nl.nbr, nl.count, self._fields, self._rho_c])
         wp.copy(self.rho, self._rho_c)
 
@@ -220,7 +222,7 @@ class Solver:
         clock = self._clock.numpy()
         steps = self._steps.numpy()
         fail = self._fail.numpy()
-        self.time, self.dt, self.steps = float(clock[0]), float(clock[1]), int(steps[0])
+        self.time, self.dt, self.dt_stable, self.steps = float(clock[0]), float(clock[1]), float(clock[2]), int(steps[0])
         for check, idx in zip(passes.CHECKS, fail):
             if idx != passes.NO_FAILURE:
                 raise HealthError(check, int(steps[1]), float(clock[3]), int(idx))
@@ -238,8 +240,8 @@ class Solver:
         self._sync()
         while self.time < t_target - 1.0e-12 * max(1.0, t_target):
             batch = 1
-            if self.dt > 0.0:
-                batch = int(min(_MAX_BATCH, max(1, 0.8 * (t_target - self.time) / self.dt)))
+            if self.dt_stable > 0.0:
+                batch = int(min(_MAX_BATCH, max(1, 0.9 * (t_target - self.time) / self.dt_stable)))
             before = self.time
             for _ in range(batch):
                 self._launch_step(t_target)
@@ -289,5 +291,5 @@ class Solver:
 
     def mean_neighbours(self) -> float:
         """Mean neighbour-list length (within the list radius) at the current positions."""
-        self.neighbours.rebuild(self.pos)
+        self.neighbours.rebuild(self.pos, force=True)
         return self.neighbours.mean_neighbours()
