@@ -105,7 +105,8 @@ def build(scalar):
             stale[0] = 1
 
     @wp.kernel(enable_backward=False, module="unique")
-    def mark_built(stale: wp.array(dtype=wp.int32)):
+    def mark_built(stale: wp.array(dtype=wp.int32), builds: wp.array(dtype=wp.int32)):
+        builds[0] = builds[0] + stale[0]
         stale[0] = 0
 
     @wp.kernel(enable_backward=False, module="unique")
@@ -210,6 +211,7 @@ class NeighbourList:
         self._ptype_sorted = wp.zeros(n, dtype=wp.int32, device=device)
         self._x_build = wp.zeros(n, dtype=wp.types.vector(3, scalar), device=device)
         self.stale = wp.ones(1, dtype=wp.int32, device=device)
+        self.builds = wp.zeros(1, dtype=wp.int32, device=device)  # how many times the lists were built
 
     def moved(self, pos: wp.array):
         """Note the particles' new positions: the lists go stale if any moved too far."""
@@ -231,9 +233,8 @@ class NeighbourList:
         self.launcher(self._neighbour_list, n, [self.grid, self._pos_sorted, self._ptype_sorted, self._order,
                                                 self._start, self._end, self.nbr, self.count, self._needs_list,
                                                 self.stale, self._x_build, self.overflow])
-        wp.launch(self._mark_built, dim=1, inputs=[self.stale], device=self.device)
+        wp.launch(self._mark_built, dim=1, inputs=[self.stale, self.builds], device=self.device)
 
     def mean_neighbours(self) -> float:
-        """Mean list length over the particles that keep a list."""
-        needs = self._needs_list.numpy() > 0
-        return float(self.count.numpy()[needs].mean())
+        """Mean list length over the fluid particles."""
+        return float(self.count.numpy()[self._ptype.numpy() == 0].mean())
