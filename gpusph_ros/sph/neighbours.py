@@ -165,11 +165,12 @@ class NeighbourList:
 
     SKIN = LIST_SKIN
 
-    def __init__(self, scalar, dim: int, support: float, lo, hi, periodic, ptype: np.ndarray,
-                 needs_list: np.ndarray, max_neighbours: int, launcher):
+    def __init__(self, scalar, dim: int, support: float, lo, hi, periodic, ptype: wp.array,
+                 needs_list: wp.array, max_neighbours: int, launcher):
+        """``ptype`` and ``needs_list`` are the solver's own device arrays (it may reorder them)."""
         (Grid, self._separation, self._cell_keys, self._cell_ranges, self._gather_sorted, self._neighbour_list,
          self._check_displacement, self._mark_built) = build(scalar)
-        n = len(needs_list)
+        n = needs_list.shape[0]
         self.n = n
         self.launcher = launcher
         self.device = device = launcher.device
@@ -205,8 +206,8 @@ class NeighbourList:
         self.nbr = wp.zeros(n * max_neighbours, dtype=wp.int32, device=device)
         self.count = wp.zeros(n, dtype=wp.int32, device=device)
         self.overflow = wp.zeros(1, dtype=wp.int32, device=device)
-        self._needs_list = wp.array(np.asarray(needs_list, dtype=np.int32), dtype=wp.int32, device=device)
-        self._ptype = wp.array(np.asarray(ptype, dtype=np.int32), dtype=wp.int32, device=device)
+        self._needs_list = needs_list
+        self._ptype = ptype
         self._pos_sorted = wp.zeros(n, dtype=wp.types.vector(3, scalar), device=device)
         self._ptype_sorted = wp.zeros(n, dtype=wp.int32, device=device)
         self._x_build = wp.zeros(n, dtype=wp.types.vector(3, scalar), device=device)
@@ -218,13 +219,19 @@ class NeighbourList:
         wp.launch(self._check_displacement, dim=self.n, inputs=[self.grid, pos, self._x_build, self.stale],
                   device=self.device)
 
+    def sort(self, pos: wp.array) -> wp.array:
+        """Sort the particles by cell; returns the particle index of each sorted position."""
+        n = self.n
+        wp.launch(self._cell_keys, dim=n, inputs=[self.grid, pos, self._keys, self._order], device=self.device)
+        wp.utils.radix_sort_pairs(self._keys, self._order, n)
+        return self._order
+
     def rebuild(self, pos: wp.array, force: bool = False):
         """Rebuild the lists if they are stale (decided on the device) or ``force``."""
         if force:
             self.stale.fill_(1)
         n = self.n
-        wp.launch(self._cell_keys, dim=n, inputs=[self.grid, pos, self._keys, self._order], device=self.device)
-        wp.utils.radix_sort_pairs(self._keys, self._order, n)
+        self.sort(pos)
         self._start.zero_()
         self._end.zero_()
         wp.launch(self._cell_ranges, dim=n, inputs=[n, self._keys, self._start, self._end], device=self.device)

@@ -311,6 +311,25 @@ def build(scalar):
             rho[i] = rho_new[i]
 
     @wp.kernel(enable_backward=False, module="unique")
+    def permute(order: wp.array(dtype=wp.int32), pos: wp.array(dtype=vec), vel: wp.array(dtype=vec),
+                rho: wp.array(dtype=scalar), mass: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
+                body: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32), needs: wp.array(dtype=wp.int32),
+                pos_o: wp.array(dtype=vec), vel_o: wp.array(dtype=vec), rho_o: wp.array(dtype=scalar),
+                mass_o: wp.array(dtype=scalar), ptype_o: wp.array(dtype=wp.int32), body_o: wp.array(dtype=wp.int32),
+                ids_o: wp.array(dtype=wp.int32), needs_o: wp.array(dtype=wp.int32)):
+        """Gather the per-particle state into cell order (``order`` from the cell sort)."""
+        k = wp.tid()
+        i = order[k]
+        pos_o[k] = pos[i]
+        vel_o[k] = vel[i]
+        rho_o[k] = rho[i]
+        mass_o[k] = mass[i]
+        ptype_o[k] = ptype[i]
+        body_o[k] = body[i]
+        ids_o[k] = ids[i]
+        needs_o[k] = needs[i]
+
+    @wp.kernel(enable_backward=False, module="unique")
     def tick(fail: wp.array(dtype=wp.int32), clock: wp.array(dtype=wp.float64), steps: wp.array(dtype=wp.int32)):
         """Advance time and step count, or record when the first failing step would have ended."""
         if fail[0] == NO_FAILURE and fail[1] == NO_FAILURE and fail[2] == NO_FAILURE:
@@ -342,4 +361,4 @@ def build(scalar):
         rho_out[i] = num / den
 
     return (Params, Fields, equation_of_state, sps_strain, interact, choose_dt, integrate, health, commit, tick,
-            shepard)
+            shepard, permute)

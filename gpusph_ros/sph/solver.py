@@ -21,6 +21,9 @@ FLUID = passes.FLUID
 BOUNDARY = passes.BOUNDARY
 
 _MAX_BATCH = 64  # steps launched between two reads of the clock
+# steps between two sorts of the particle arrays into cell order: neighbours then sit next to each
+# other in memory, which the force passes (memory-bound on a CPU, coalesced on a GPU) need
+_REORDER_EVERY = 16
 
 
 class HealthError(RuntimeError):
@@ -81,16 +84,14 @@ class Solver:
         if self.n == 0:
             raise ValueError("particles: the particle set is empty")
         (self._Params, self._Fields, self._eos, self._sps, self._interact, self._choose_dt, self._integrate,
-         self._health, self._commit, self._tick, self._shepard) = passes.build(self.scalar)
+         self._health, self._commit, self._tick, self._shepard, self._permute) = passes.build(self.scalar)
         self.params = self._make_params()
         self.launch = Launcher(self.device, cfg.cpu_threads)
-        # boundary particles need their own list only to update their density or sum a body force
-        needs_list = (particles.ptype == FLUID) | (particles.body >= 0) | (cfg.boundary == "dynamic")
+        self._allocate(particles)
         self.neighbours = NeighbourList(self.scalar, cfg.dim, 2.0 * cfg.h, cfg.domain_lo, cfg.domain_hi,
-                                        cfg.periodic, particles.ptype, needs_list,
+                                        cfg.periodic, self.ptype, self._needs_list,
                                         max_neighbours or default_max_neighbours(cfg.dim, cfg.hdx),
                                         self.launch)
-        self._allocate(particles)
         self._launched = 0
         self.time, self.dt, self.dt_stable, self.steps = 0.0, 0.0, 0.0, 0
 
@@ -148,6 +149,13 @@ class Solver:
         self.mass = arr(particles.mass, s)
         self.ptype = arr(particles.ptype, wp.int32)
         self.body = arr(particles.body, wp.int32)
+        # the arrays are kept in cell order; ids maps each slot back to the caller's particle
+        self.ids = arr(np.arange(n, dtype=np.int32), wp.int32)
+        # boundary particles need their own list only to update their density or sum a body force
+        needs = (particles.ptype == FLUID) | (particles.body >= 0) | (cfg.boundary == "dynamic")
+        self._needs_list = arr(needs.astype(np.int32), wp.int32)
+        self._sorted = [wp.empty_like(a) for a in (self.pos, self.vel, self.rho, self.mass, self.ptype, self.body,
+                                                   self.ids, self._needs_list)]
         self.pressure = wp.zeros(n, dtype=s, device=dev)
         # half-step and candidate states, rates of change
         self._pos_h, self._vel_h, self._rho_h = wp.zeros_like(self.pos), wp.zeros_like(self.vel), wp.zeros_like(self.rho)
@@ -185,8 +193,18 @@ class Solver:
         self.launch(self._interact, n, [p, nl.grid, nl.nbr, nl.count, f, self._plane_pt, self._plane_n, self.acc,
                                         self._drho, self._xsph, self._maxima])
 
+    def _reorder(self):
+        state = [self.pos, self.vel, self.rho, self.mass, self.ptype, self.body, self.ids, self._needs_list]
+        order = self.neighbours.sort(self.pos)
+        wp.launch(self._permute, dim=self.n, inputs=[order, *state, *self._sorted], device=self.device)
+        for dst, src in zip(state, self._sorted):
+            wp.copy(dst, src)
+        self.neighbours.stale.fill_(1)
+
     def _launch_step(self, t_target: float):
         n, dev, p = self.n, self.device, self.params
+        if self._launched % _REORDER_EVERY == 0:
+            self._reorder()
         self.neighbours.rebuild(self.pos)
         self._maxima.zero_()
         self._forces(self._fields)
@@ -225,7 +243,7 @@ class Solver:
         self.time, self.dt, self.dt_stable, self.steps = float(clock[0]), float(clock[1]), float(clock[2]), int(steps[0])
         for check, idx in zip(passes.CHECKS, fail):
             if idx != passes.NO_FAILURE:
-                raise HealthError(check, int(steps[1]), float(clock[3]), int(idx))
+                raise HealthError(check, int(steps[1]), float(clock[3]), int(self.ids.numpy()[idx]))
         overflow = int(self.neighbours.overflow.numpy()[0])
         if overflow:
             raise NeighbourOverflow(f"a particle has {overflow} neighbours, more than the list's "
@@ -277,17 +295,19 @@ class Solver:
 
     # -- state out ------------------------------------------------------------------------
     def snapshot(self) -> dict:
-        """Host copies of the state: pos, vel (n x 3), rho, pressure, mass (n), ptype, body (n)."""
+        """Host copies of the state in the caller's particle order: pos, vel (n x 3), rho, pressure,
+        mass (n), ptype, body (n); with SPS also the stress (sps_tau_diag, sps_tau_off)."""
         wp.launch(self._eos, dim=self.n, inputs=[self.params, self._fields], device=self.device)
-        return {
-            "pos": self.pos.numpy().astype(np.float64),
-            "vel": self.vel.numpy().astype(np.float64),
-            "rho": self.rho.numpy().astype(np.float64),
-            "pressure": self.pressure.numpy().astype(np.float64),
-            "mass": self.mass.numpy().astype(np.float64),
-            "ptype": self.ptype.numpy(),
-            "body": self.body.numpy(),
-        }
+        slot_of = np.argsort(self.ids.numpy())
+        arrays = {"pos": self.pos, "vel": self.vel, "rho": self.rho, "pressure": self.pressure, "mass": self.mass}
+        snap = {name: a.numpy().astype(np.float64)[slot_of] for name, a in arrays.items()}
+        snap["ptype"] = self.ptype.numpy()[slot_of]
+        snap["body"] = self.body.numpy()[slot_of]
+        if self.config.viscosity == "sps":
+            # SPS stress / rho of the last force pass: (xx, yy, zz) and (xy, xz, yz)
+            snap["sps_tau_diag"] = self._fields.tau_diag.numpy().astype(np.float64)[slot_of]
+            snap["sps_tau_off"] = self._fields.tau_off.numpy().astype(np.float64)[slot_of]
+        return snap
 
     def mean_neighbours(self) -> float:
         """Mean neighbour-list length (within the list radius) at the current positions."""
