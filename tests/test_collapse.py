@@ -6,18 +6,15 @@ with no time shift, within 15%. The computed front leads: the laboratory gate to
 import numpy as np
 import pytest
 
-from gpusph_ros.scenes.boxes import box_tank
-from gpusph_ros.sph import SolverConfig, Solver
-
-A = 0.05715  # column width [m] (2.25 in)
+from gpusph_ros.scenes.collapse import WIDTH as A, collapse_2d
+from gpusph_ros.sph import Solver
 
 
 @pytest.mark.parametrize("precision", ["float32", "float64"])
 def test_surge_front_matches_martin_moyce(shared_dir, precision):
     table = np.loadtxt(shared_dir / "data/martin_moyce_1952_collapse/ocellaris/martin_moyce_1952_table2_surge_front.txt")
     points = table[(table[:, 0] >= 1.0) & (table[:, 0] <= 2.55)]
-    cfg = SolverConfig(dim=2, dx=A / 30, gravity=(0.0, -9.81, 0.0), depth=2 * A, precision=precision)
-    cfg, parts = box_tank(cfg, (6 * A, 2.5 * A), [((0.0, 0.0), (A, 2 * A))])
+    cfg, parts = collapse_2d(30, precision=precision)
     solver = Solver(cfg, parts)
     rate = np.sqrt(2 * 9.81 / A)
     rows = []

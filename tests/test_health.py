@@ -3,15 +3,13 @@ and the state from before the failing step is kept."""
 import numpy as np
 import pytest
 
-from gpusph_ros.scenes.boxes import box_tank
-from gpusph_ros.sph import HealthError, SolverConfig, Solver
+from gpusph_ros.scenes.collapse import collapse_2d
+from gpusph_ros.sph import HealthError, Solver
 from gpusph_ros.sph.passes import CHECKS
 
 
 def column(**overrides):
-    a = 0.1
-    cfg = SolverConfig(dim=2, dx=a / 15, gravity=(0.0, -9.81, 0.0), depth=2 * a, **overrides)
-    return box_tank(cfg, (4 * a, 2.5 * a), [((0.0, 0.0), (a, 2 * a))])
+    return collapse_2d(15, **overrides)
 
 
 def test_reconfigure_refuses_what_needs_new_particles():

@@ -1,0 +1,51 @@
+"""Martin & Moyce 1952 column collapse at several resolutions: surge front against the table,
+with no time shift, and the wall time each resolution cost.
+
+    python bench/collapse.py [--per-width 20 30 40] [--precision float32]
+"""
+import argparse
+import time
+from pathlib import Path
+
+import numpy as np
+import warp as wp
+
+from gpusph_ros.scenes.collapse import WIDTH, collapse_2d
+from gpusph_ros.sph import Solver
+
+TABLE = (Path(__file__).resolve().parents[2] / "shared/data/martin_moyce_1952_collapse/ocellaris/"
+         "martin_moyce_1952_table2_surge_front.txt")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--per-width", type=int, nargs="+", default=[20, 30, 40])
+    parser.add_argument("--precision", default="float32")
+    parser.add_argument("--device", default="cpu")
+    args = parser.parse_args()
+    wp.config.quiet = True
+    table = np.loadtxt(TABLE)
+    points = table[(table[:, 0] >= 1.0) & (table[:, 0] <= 2.55)]
+    rate = np.sqrt(2 * 9.81 / WIDTH)
+    print("T      Z_exp  " + "  ".join(f"a/{k:<3d} Z   err  " for k in args.per_width))
+    results = []
+    for per_width in args.per_width:
+        cfg, parts = collapse_2d(per_width, precision=args.precision, device=args.device)
+        solver = Solver(cfg, parts)
+        start = time.perf_counter()
+        fronts = []
+        for T in points[:, 0]:
+            solver.advance(float(T / rate))
+            snap = solver.snapshot()
+            fronts.append(snap["pos"][snap["ptype"] == 0, 0].max() / WIDTH)
+        results.append((per_width, solver.n, solver.steps, time.perf_counter() - start, fronts))
+    for k, (T, Z) in enumerate(points):
+        cells = "  ".join(f"{r[4][k]:5.3f} {100 * (r[4][k] / Z - 1):+5.1f}%" for r in results)
+        print(f"{T:5.2f}  {Z:5.2f}  {cells}")
+    for per_width, n, steps, wall, _ in results:
+        print(f"a/{per_width}: {n} particles, {steps} steps, {wall:.1f} s wall ({args.precision}, {args.device}, "
+              "compilation included on a first run)")
+
+
+if __name__ == "__main__":
+    main()
