@@ -15,7 +15,7 @@ $(STAMP): requirements.txt setup.py package.xml
 	touch $(STAMP)
 
 run: $(STAMP)
-	$(BIN)/python -m gpusph_ros.cli run dambreak3d --dx 0.03 --end-time 0.5
+	$(BIN)/python -m gpusph_ros.cli run dambreak3d --dx 0.02 --end-time 0.8
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q tests
