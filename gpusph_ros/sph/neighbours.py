@@ -69,6 +69,16 @@ def build(scalar):
             return (c + grid.dims[ax]) % grid.dims[ax]
         return -1
 
+    @wp.func
+    def neighbour_cell(grid: Grid, ci: wp.vec3i, dx: int, dy: int, dz: int) -> int:
+        """The flat index of the cell at offset (dx, dy, dz) from cell ci, or -1 off the grid."""
+        cx = wrap_cell(grid, 0, ci[0] + dx)
+        cy = wrap_cell(grid, 1, ci[1] + dy)
+        cz = wrap_cell(grid, 2, ci[2] + dz)
+        if cx < 0 or cy < 0 or cz < 0:
+            return -1
+        return (cz * grid.dims[1] + cy) * grid.dims[0] + cx
+
     @wp.kernel(enable_backward=False, module="unique")
     def cell_keys(grid: Grid, pos: wp.array(dtype=vec), keys: wp.array(dtype=wp.int32),
                   values: wp.array(dtype=wp.int32)):
@@ -132,18 +142,10 @@ def build(scalar):
         n = int(0)
         base = i * grid.max_neighbours
         for dz in range(-grid.reach_z, grid.reach_z + 1):
-            cz = wrap_cell(grid, 2, ci[2] + dz)
-            if cz < 0:
-                continue
             for dy in range(-grid.reach, grid.reach + 1):
-                cy = wrap_cell(grid, 1, ci[1] + dy)
-                if cy < 0:
-                    continue
-                row = (cz * grid.dims[1] + cy) * grid.dims[0]
                 for dx in range(-grid.reach, grid.reach + 1):
-                    cx = wrap_cell(grid, 0, ci[0] + dx)
-                    if cx >= 0:
-                        cell = row + cx
+                    cell = neighbour_cell(grid, ci, dx, dy, dz)
+                    if cell >= 0:
                         for k in range(start[cell], end[cell]):
                             # a boundary particle needs only its fluid neighbours
                             if k != ki and (fluid_i or ptype_sorted[k] == 0):
@@ -157,7 +159,8 @@ def build(scalar):
             n = grid.max_neighbours
         count[i] = n
 
-    return Grid, separation, cell_keys, cell_ranges, gather_sorted, neighbour_list, check_displacement, mark_built
+    return (Grid, separation, cell_keys, cell_ranges, gather_sorted, neighbour_list, check_displacement, mark_built,
+            cell_coord, neighbour_cell)
 
 
 class NeighbourList:
@@ -169,7 +172,7 @@ class NeighbourList:
                  needs_list: wp.array, max_neighbours: int, launcher):
         """``ptype`` and ``needs_list`` are the solver's own device arrays (it may reorder them)."""
         (Grid, self._separation, self._cell_keys, self._cell_ranges, self._gather_sorted, self._neighbour_list,
-         self._check_displacement, self._mark_built) = build(scalar)
+         self._check_displacement, self._mark_built, _, _) = build(scalar)
         n = needs_list.shape[0]
         self.n = n
         self.launcher = launcher
@@ -241,6 +244,19 @@ class NeighbourList:
                                                 self._start, self._end, self.nbr, self.count, self._needs_list,
                                                 self.stale, self._x_build, self.overflow])
         wp.launch(self._mark_built, dim=1, inputs=[self.stale, self.builds], device=self.device)
+
+    @property
+    def cell_start(self) -> wp.array:
+        """First sorted slot of each cell, as of the last sort (``order`` maps slots to particles)."""
+        return self._start
+
+    @property
+    def cell_end(self) -> wp.array:
+        return self._end
+
+    @property
+    def order(self) -> wp.array:
+        return self._order
 
     def mean_neighbours(self) -> float:
         """Mean list length over the fluid particles."""

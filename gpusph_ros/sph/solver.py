@@ -72,7 +72,12 @@ def default_max_neighbours(dim: int, hdx: float) -> int:
 
 
 class Solver:
-    """Weakly-compressible SPH (thesis Section 2.3) on Warp."""
+    """Weakly-compressible SPH (thesis Section 2.3) on Warp.
+
+    The device arrays (pos, vel, rho, pressure, mass, ptype, body) are kept in cell order and
+    re-sorted every few steps; ``ids`` gives the caller's index of each slot, and ``snapshot``
+    returns host copies in the caller's order.
+    """
 
     def __init__(self, config: SolverConfig, particles: Particles, max_neighbours: "int | None" = None):
         self.config = config.validate()
@@ -308,6 +313,13 @@ class Solver:
             snap["sps_tau_diag"] = self._fields.tau_diag.numpy().astype(np.float64)[slot_of]
             snap["sps_tau_off"] = self._fields.tau_off.numpy().astype(np.float64)[slot_of]
         return snap
+
+    def measurement_view(self):
+        """(params, fields, neighbours) with pressure and the cell sort brought up to the current
+        state, for measurements that run on the device between steps."""
+        wp.launch(self._eos, dim=self.n, inputs=[self.params, self._fields], device=self.device)
+        self.neighbours.rebuild(self.pos)
+        return self.params, self._fields, self.neighbours
 
     def mean_neighbours(self) -> float:
         """Mean neighbour-list length (within the list radius) at the current positions."""

@@ -1,0 +1,1 @@
+"""Measurements: read solver state on its device, return numbers to the host."""

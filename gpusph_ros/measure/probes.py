@@ -1,0 +1,90 @@
+"""Point probes: velocity, pressure and density at fixed points, interpolated with the run's own
+kernel and Shepard-normalised (thesis Section 3.2; Eq. 2.4 divided by the kernel sum Eq. 2.28's
+denominator):
+
+    f(x) = sum_b f_b W(x - x_b) V_b / sum_b W(x - x_b) V_b,  V_b = m_b / rho_b, over fluid b.
+
+The normalisation makes a uniform field come back exactly whatever the particle arrangement, so
+a probe does not inherit the 1-5% bias of a plain kernel sum on a lattice at h = 1.3 dx. The
+interpolation runs on the solver's device; only the probe values come to the host.
+"""
+import functools
+
+import numpy as np
+import warp as wp
+
+from ..sph import kernels, neighbours, passes
+
+FLUID = passes.FLUID
+
+
+@functools.lru_cache(maxsize=None)
+def build(scalar):
+    vec = wp.types.vector(3, scalar)
+    _, _, kernel_w, _, _ = kernels.build(scalar)
+    Grid, separation, *_, cell_coord, neighbour_cell = neighbours.build(scalar)
+    Params, Fields, *_ = passes.build(scalar)
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def interpolate(p: Params, grid: Grid, start: wp.array(dtype=wp.int32), end: wp.array(dtype=wp.int32),
+                    order: wp.array(dtype=wp.int32), f: Fields, points: wp.array(dtype=vec),
+                    vel: wp.array(dtype=vec), pressure: wp.array(dtype=scalar), rho: wp.array(dtype=scalar),
+                    weight: wp.array(dtype=scalar)):
+        k = wp.tid()
+        x = points[k]
+        ci = cell_coord(grid, x)
+        u = vec(scalar(0.0))
+        pr = scalar(0.0)
+        r = scalar(0.0)
+        wsum = scalar(0.0)
+        for dz in range(-grid.reach_z, grid.reach_z + 1):
+            for dy in range(-grid.reach, grid.reach + 1):
+                for dx in range(-grid.reach, grid.reach + 1):
+                    cell = neighbour_cell(grid, ci, dx, dy, dz)
+                    if cell >= 0:
+                        for s in range(start[cell], end[cell]):
+                            b = order[s]
+                            if f.ptype[b] == FLUID:
+                                w = kernel_w(p.kernel, p.norm, p.inv_h, wp.length(separation(grid, x, f.pos[b])))
+                                wv = w * f.mass[b] / f.rho[b]
+                                u += wv * f.vel[b]
+                                pr += wv * f.pressure[b]
+                                r += wv * f.rho[b]
+                                wsum += wv
+        weight[k] = wsum
+        if wsum > scalar(0.0):
+            vel[k] = u / wsum
+            pressure[k] = pr / wsum
+            rho[k] = r / wsum
+        else:
+            vel[k] = vec(scalar(0.0))
+            pressure[k] = scalar(0.0)
+            rho[k] = scalar(0.0)
+
+    return interpolate
+
+
+class PointProbes:
+    """Probes at fixed points of one solver. ``sample()`` returns host arrays."""
+
+    def __init__(self, solver, points):
+        self.solver = solver
+        pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        dev = solver.device
+        self._interpolate = build(solver.scalar)
+        self.points = wp.array(pts, dtype=solver.vec, device=dev)
+        k = len(pts)
+        self._vel = wp.zeros(k, dtype=solver.vec, device=dev)
+        self._pressure = wp.zeros(k, dtype=solver.scalar, device=dev)
+        self._rho = wp.zeros(k, dtype=solver.scalar, device=dev)
+        self._weight = wp.zeros(k, dtype=solver.scalar, device=dev)
+
+    def sample(self) -> dict:
+        """vel (k x 3), pressure, rho, and weight = sum W V (0 where no fluid is within 2h: a dry
+        probe, whose other values are then 0)."""
+        params, fields, nl = self.solver.measurement_view()
+        wp.launch(self._interpolate, dim=self.points.shape[0],
+                  inputs=[params, nl.grid, nl.cell_start, nl.cell_end, nl.order, fields, self.points, self._vel,
+                          self._pressure, self._rho, self._weight], device=self.solver.device)
+        return {"vel": self._vel.numpy().astype(np.float64), "pressure": self._pressure.numpy().astype(np.float64),
+                "rho": self._rho.numpy().astype(np.float64), "weight": self._weight.numpy().astype(np.float64)}
