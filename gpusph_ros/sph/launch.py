@@ -1,9 +1,9 @@
 """Launching the heavy passes on every core of a CPU.
 
 Warp runs a CPU kernel on one thread, and its ctypes call releases the GIL, so a pass whose
-threads are independent can be cut into contiguous chunks launched from a thread pool. Each such
-kernel takes ``chunk, stride`` as its last two arguments. On a GPU the
-whole range goes in one launch.
+threads are independent can be cut into chunks launched from a thread pool, one per core. Each
+such kernel takes ``chunk, stride`` as its last two arguments. On a GPU the whole range goes in
+one launch.
 
 Chunks are strided, not contiguous: particle = wp.tid() * stride + chunk. Fluid and boundary
 particles cost very different amounts and lie in separate index ranges, so contiguous halves

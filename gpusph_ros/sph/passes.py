@@ -133,6 +133,10 @@ def build(scalar):
         return acc, drho, xsph, mu
 
     @wp.func
+    def healthy(fail: wp.array(dtype=wp.int32)) -> bool:
+        return fail[0] == NO_FAILURE and fail[1] == NO_FAILURE and fail[2] == NO_FAILURE
+
+    @wp.func
     def track_max(maxima: wp.array(dtype=scalar), k: int, value: scalar):
         # read before the atomic: after the first few threads almost none need to write
         if value > maxima[k]:
@@ -250,9 +254,8 @@ def build(scalar):
             dt = wp.float64(0.0)
         elif dt > remaining:
             dt = remaining
-        for c in range(3):
-            if fail[c] != NO_FAILURE:
-                dt = wp.float64(0.0)
+        if not healthy(fail):
+            dt = wp.float64(0.0)
         clock[1] = dt
 
     @wp.kernel(enable_backward=False, module="unique")
@@ -305,7 +308,7 @@ def build(scalar):
                rho_new: wp.array(dtype=scalar), pos: wp.array(dtype=vec), vel: wp.array(dtype=vec),
                rho: wp.array(dtype=scalar)):
         i = wp.tid()
-        if fail[0] == NO_FAILURE and fail[1] == NO_FAILURE and fail[2] == NO_FAILURE:
+        if healthy(fail):
             pos[i] = pos_new[i]
             vel[i] = vel_new[i]
             rho[i] = rho_new[i]
@@ -332,7 +335,7 @@ def build(scalar):
     @wp.kernel(enable_backward=False, module="unique")
     def tick(fail: wp.array(dtype=wp.int32), clock: wp.array(dtype=wp.float64), steps: wp.array(dtype=wp.int32)):
         """Advance time and step count, or record when the first failing step would have ended."""
-        if fail[0] == NO_FAILURE and fail[1] == NO_FAILURE and fail[2] == NO_FAILURE:
+        if healthy(fail):
             if clock[1] > wp.float64(0.0):
                 clock[0] = clock[0] + clock[1]
                 steps[0] = steps[0] + 1
