@@ -25,8 +25,7 @@ def _inside(pts, box, margin=0.0):
 def dambreak1(dx: float, **overrides):
     """(config, particles) for DamBreak 1 at particle spacing ``dx``; overrides go to the config."""
     cfg = SolverConfig(dim=3, dx=dx, depth=COLUMN[1][2], gravity=(0.0, 0.0, -9.81), **overrides)
-    bed = max(dx, round(WET_BED / dx) * dx)  # at least one layer of particles
-    boxes = [COLUMN, ((COLUMN[1][0], 0.0, 0.0), (TANK[0], TANK[1], bed))]
+    boxes = [COLUMN, ((COLUMN[1][0], 0.0, 0.0), (TANK[0], TANK[1], WET_BED))]  # box_tank fills each exactly
     cfg, parts = box_tank(cfg, TANK, boxes, headroom=1.0)
     keep = ~((parts.ptype == 0) & _inside(parts.pos, OBSTRUCTION))
     # the obstruction: boundary particles on the lattice, a wall's thickness in from each face
