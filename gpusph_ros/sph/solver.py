@@ -322,6 +322,6 @@ class Solver:
         return self.params, self._fields, self.neighbours
 
     def mean_neighbours(self) -> float:
-        """Mean neighbour-list length (within the list radius) at the current positions."""
+        """Mean neighbour-list length of the fluid particles (list radius 1.1 x 2h), freshly built."""
         self.neighbours.rebuild(self.pos, force=True)
         return self.neighbours.mean_neighbours()
