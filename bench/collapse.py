@@ -10,9 +10,12 @@ from pathlib import Path
 import numpy as np
 import warp as wp
 
-from gpusph_ros.scenes.collapse import WIDTH, collapse_2d
+from gpusph_ros.scenes.build import build
+from gpusph_ros.scenes.schema import load_scene
 from gpusph_ros.sph import Solver
 
+SCENE = load_scene("collapse_2d")
+WIDTH = SCENE.fluid[0].hi[0]
 TABLE = (Path(__file__).resolve().parents[2] / "shared/data/martin_moyce_1952_collapse/ocellaris/"
          "martin_moyce_1952_table2_surge_front.txt")
 
@@ -30,8 +33,8 @@ def main():
     print("T      Z_exp  " + "  ".join(f"a/{k:<3d} Z   err  " for k in args.per_width))
     results = []
     for per_width in args.per_width:
-        cfg, parts = collapse_2d(per_width, precision=args.precision, device=args.device)
-        solver = Solver(cfg, parts)
+        model = build(SCENE, dx=WIDTH / per_width, precision=args.precision, device=args.device)
+        solver = Solver(model.config, model.particles)
         start = time.perf_counter()
         fronts = []
         for T in points[:, 0]:

@@ -15,15 +15,16 @@ import time
 
 import warp as wp
 
-from gpusph_ros.scenes.dambreak import dambreak1
+from gpusph_ros.scenes.build import build
+from gpusph_ros.scenes.schema import load_scene
 from gpusph_ros.sph import Solver
 
 FORCE_PASSES_PER_STEP = 2
 
 
 def measure(dx: float, precision: str, device: str, seconds: float, start_time: float):
-    cfg, parts = dambreak1(dx, precision=precision, device=device)
-    solver = Solver(cfg, parts)
+    model = build(load_scene("dambreak1_thesis"), dx=dx, precision=precision, device=device)
+    solver = Solver(model.config, model.particles)
     solver.advance(start_time)
     wp.synchronize_device(solver.device)
     neighbours = solver.mean_neighbours()
@@ -41,7 +42,7 @@ def measure(dx: float, precision: str, device: str, seconds: float, start_time: 
     builds = int(solver.neighbours.builds.numpy()[0]) - builds0
     return {
         "device": str(solver.device), "precision": precision, "dx": dx, "particles": solver.n,
-        "fluid": int((parts.ptype == 0).sum()), "neighbours": neighbours, "steps": steps, "wall": wall,
+        "fluid": int((model.particles.ptype == 0).sum()), "neighbours": neighbours, "steps": steps, "wall": wall,
         "steps_per_s": rate, "mipps": solver.n * rate / 1e6,
         "interactions_per_s": listed * FORCE_PASSES_PER_STEP * rate, "sim_time": solver.time,
         "rebuilds": builds / max(steps, 1),

@@ -6,14 +6,17 @@ with no time shift, within 15%. The computed front leads: the laboratory gate to
 import numpy as np
 import pytest
 
-from gpusph_ros.scenes.collapse import WIDTH as A, collapse_2d
+from gpusph_ros.scenes.build import build
+from gpusph_ros.scenes.run import read_run_file
+from gpusph_ros.scenes.schema import load_scene
 from gpusph_ros.sph import Solver
 
 
+SCENE = load_scene("collapse_2d")
+A = SCENE.fluid[0].hi[0]  # column width a
 # the defaults in both precisions, and the thesis's scenario 3 as GPUSPH ran it (cubic spline,
 # laminar + SPS, XSPH, Shepard filter every 40 steps, Lennard-Jones walls, no density diffusion)
-THESIS_SCENARIO_3 = dict(kernel="cubic_spline", viscosity="sps", xsph=True, shepard_every=40,
-                         boundary="lennard_jones", density_diffusion="none")
+THESIS_SCENARIO_3 = read_run_file("thesis_scenario3")
 CASES = [("float32", {}), ("float64", {}), ("float32", THESIS_SCENARIO_3)]
 
 
@@ -21,7 +24,8 @@ CASES = [("float32", {}), ("float64", {}), ("float32", THESIS_SCENARIO_3)]
 def test_surge_front_matches_martin_moyce(shared_dir, precision, numerics):
     table = np.loadtxt(shared_dir / "data/martin_moyce_1952_collapse/ocellaris/martin_moyce_1952_table2_surge_front.txt")
     points = table[(table[:, 0] >= 1.0) & (table[:, 0] <= 2.55)]
-    cfg, parts = collapse_2d(30, precision=precision, **numerics)
+    model = build(SCENE, dx=A / 30, precision=precision, **numerics)
+    cfg, parts = model.config, model.particles
     solver = Solver(cfg, parts)
     rate = np.sqrt(2 * 9.81 / A)
     rows = []

@@ -3,13 +3,16 @@ and the state from before the failing step is kept."""
 import numpy as np
 import pytest
 
-from gpusph_ros.scenes.collapse import collapse_2d
+from gpusph_ros.scenes.build import build
+from gpusph_ros.scenes.schema import load_scene
 from gpusph_ros.sph import HealthError, Solver
 from gpusph_ros.sph.passes import CHECKS
 
 
 def column(**overrides):
-    return collapse_2d(15, **overrides)
+    scene = load_scene("collapse_2d")
+    model = build(scene, dx=scene.fluid[0].hi[0] / 15, **overrides)
+    return model.config, model.particles
 
 
 def test_reconfigure_refuses_what_needs_new_particles():

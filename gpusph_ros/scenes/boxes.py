@@ -14,6 +14,8 @@ from ..sph.config import Plane, SolverConfig
 from ..sph.eos import hydrostatic_density
 from ..sph.solver import BOUNDARY, FLUID, Particles
 
+WALL_KINDS = ("particles", "planes")
+
 
 def lattice(lo, hi, dx: float, dim: int) -> np.ndarray:
     """Cell centres of a lattice of spacing dx filling the box [lo, hi] (z = 0 in 2D)."""
@@ -88,22 +90,41 @@ def wall_shell(hi, dx: float, dim: int, spacing: float, periodic=(False, False, 
     return pts[np.sort(keep)]
 
 
-def tank_planes(hi, dim: int, periodic=(False, False, False)) -> list:
-    """The floor and side walls of the open-top tank [0, hi] as planes with inward normals."""
+def wall_faces(dim: int) -> tuple:
+    """Names of the walls of an open-top tank: the two ends of each horizontal axis and the floor."""
+    return ("x_min", "x_max", "floor") if dim == 2 else ("x_min", "x_max", "y_min", "y_max", "floor")
+
+
+def _face(ax: int, side: int, dim: int) -> str:
+    return "floor" if ax == dim - 1 else "xy"[ax] + ("_min" if side == 0 else "_max")
+
+
+def tank_planes(hi, dim: int, periodic=(False, False, False), faces=None) -> list:
+    """The walls of the open-top tank [0, hi] named in ``faces`` (default: all) as planes with
+    inward normals; none across periodic axes."""
     planes = []
     for ax in range(dim):
         if periodic[ax]:
             continue
-        normal = [0.0, 0.0, 0.0]
-        normal[ax] = 1.0
-        planes.append(Plane(point=(0.0, 0.0, 0.0), normal=tuple(normal)))
-        if ax != dim - 1:
+        for side in ((0,) if ax == dim - 1 else (0, 1)):
+            if faces is not None and _face(ax, side, dim) not in faces:
+                continue
             normal = [0.0, 0.0, 0.0]
-            normal[ax] = -1.0
+            normal[ax] = 1.0 if side == 0 else -1.0
             point = [0.0, 0.0, 0.0]
-            point[ax] = hi[ax]
+            point[ax] = 0.0 if side == 0 else hi[ax]
             planes.append(Plane(point=tuple(point), normal=tuple(normal)))
     return planes
+
+
+def beyond_faces(pts, hi, dim: int, faces) -> np.ndarray:
+    """True for each point that lies outside the tank [0, hi] across one of ``faces``."""
+    out = np.zeros(len(pts), dtype=bool)
+    for ax in range(dim):
+        for side in ((0,) if ax == dim - 1 else (0, 1)):
+            if _face(ax, side, dim) in faces:
+                out |= (pts[:, ax] < 0.0) if side == 0 else (pts[:, ax] > hi[ax])
+    return out
 
 
 def boundary_layers(boundary: str, hdx: float) -> int:
@@ -111,18 +132,24 @@ def boundary_layers(boundary: str, hdx: float) -> int:
     return int(np.ceil(2.0 * hdx)) if boundary == "dynamic" else 1
 
 
-def box_tank(cfg: SolverConfig, tank, fluid_boxes, walls: str = "particles", headroom: float = 0.5):
+def box_tank(cfg: SolverConfig, tank, fluid_boxes, walls="particles", headroom: float = 0.5):
     """Particles and configuration for fluid boxes at rest in an open-top tank [0, tank].
 
     ``fluid_boxes`` is a list of (lo, hi) boxes; each starts hydrostatic under its own top.
-    ``walls`` is "particles" (the configured boundary model) or "planes". Horizontal axes that
-    ``cfg.periodic`` marks have no walls and the domain spans exactly [0, tank] there. Returns
-    the config with domain and planes filled in, and the particle set.
+    ``walls`` is "particles" (the configured boundary model), "planes", or a mapping from wall name
+    (``wall_faces``) to one of those. Horizontal axes that ``cfg.periodic`` marks have no walls and
+    the domain spans exactly [0, tank] there. Returns the config with domain and planes filled in,
+    and the particle set.
     """
     periodic = cfg.periodic
     dim, dx = cfg.dim, cfg.dx
     up = dim - 1
     g = cfg.g_norm
+    kinds = {face: walls for face in wall_faces(dim)} if isinstance(walls, str) else dict(walls)
+    for face, kind in kinds.items():
+        if kind not in WALL_KINDS:
+            raise ValueError(f"walls.{face}: {kind!r} is not one of {', '.join(WALL_KINDS)}")
+    plane_faces = {face for face, kind in kinds.items() if kind == "planes"}
     fluid, rho, mass = [], [], []
     for lo, hi in fluid_boxes:
         pts, volume = fill_box(lo, hi, dx, dim)
@@ -132,22 +159,19 @@ def box_tank(cfg: SolverConfig, tank, fluid_boxes, walls: str = "particles", hea
     fluid = np.concatenate(fluid)
     rho = np.concatenate(rho)
     layers = 0
-    planes = []
-    if walls == "particles":
+    wall = np.zeros((0, 3))
+    if len(plane_faces) < len(kinds):
         layers = boundary_layers(cfg.boundary, cfg.hdx)
         if cfg.boundary == "dynamic":
             wall = wall_particles(tank, dx, dim, layers, periodic)
         else:
             spacing = dx / cfg.mk_beta if cfg.boundary == "monaghan_kajtar" else dx
             wall = wall_shell(tank, dx, dim, spacing, periodic)
-        surface = max(hi[up] for _, hi in fluid_boxes)
-        wall_rho = hydrostatic_density(surface - wall[:, up], cfg.rho0, cfg.eos_b, cfg.gamma, g)
-    elif walls == "planes":
-        planes = tank_planes(tank, dim, periodic)
-        wall = np.zeros((0, 3))
-        wall_rho = np.zeros(0)
-    else:
-        raise ValueError(f"walls: {walls!r} is not one of particles, planes")
+        # a particle wall stops where a plane takes over
+        wall = wall[~beyond_faces(wall, tank, dim, plane_faces)]
+    surface = max(hi[up] for _, hi in fluid_boxes)
+    wall_rho = hydrostatic_density(surface - wall[:, up], cfg.rho0, cfg.eos_b, cfg.gamma, g)
+    planes = tank_planes(tank, dim, periodic, plane_faces)
     pad = [0.0 if periodic[ax] else (layers + 1) * dx for ax in range(3)]
     lo = [-pad[ax] if ax < dim else -1.0 for ax in range(3)]
     hi = [tank[ax] + pad[ax] if ax < dim else 1.0 for ax in range(3)]

@@ -1,0 +1,60 @@
+"""Depth-averaged velocity: the mean velocity of the fluid particles inside a vertical cylinder
+of radius R around a horizontal point (thesis Section 3.3, R = 3 dx; in 2D a vertical strip of
+half-width R). Summed on the solver's device; only the sums come to the host."""
+import functools
+
+import numpy as np
+import warp as wp
+
+from ..sph import passes
+
+FLUID = passes.FLUID
+
+
+@functools.lru_cache(maxsize=None)
+def build(scalar):
+    vec = wp.types.vector(3, scalar)
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def column_sums(up: int, centres: wp.array(dtype=vec), radius2: wp.array(dtype=scalar),
+                    pos: wp.array(dtype=vec), vel: wp.array(dtype=vec), ptype: wp.array(dtype=wp.int32),
+                    sums: wp.array(dtype=vec), counts: wp.array(dtype=wp.int32)):
+        i = wp.tid()
+        if ptype[i] != FLUID:
+            return
+        for k in range(centres.shape[0]):
+            d = pos[i] - centres[k]
+            d[up] = scalar(0.0)
+            if wp.dot(d, d) <= radius2[k]:
+                wp.atomic_add(sums, k, vel[i])
+                wp.atomic_add(counts, k, 1)
+
+    return column_sums
+
+
+class ColumnMeans:
+    """Mean fluid velocity in vertical columns at horizontal ``positions`` (3-vectors; the vertical
+    component is ignored) with radii ``radii`` [m]."""
+
+    def __init__(self, solver, positions, radii):
+        self.solver = solver
+        dev = solver.device
+        self._sums_kernel = build(solver.scalar)
+        self.centres = wp.array(np.asarray(positions, dtype=np.float64).reshape(-1, 3), dtype=solver.vec, device=dev)
+        self.radius2 = wp.array(np.asarray(radii, dtype=np.float64) ** 2, dtype=solver.scalar, device=dev)
+        k = self.centres.shape[0]
+        self._sums = wp.zeros(k, dtype=solver.vec, device=dev)
+        self._counts = wp.zeros(k, dtype=wp.int32, device=dev)
+
+    def sample(self) -> dict:
+        """vel (k x 3, zero where a column holds no fluid) and count (fluid particles in each)."""
+        s = self.solver
+        self._sums.zero_()
+        self._counts.zero_()
+        # one launch: CPU atomics are not atomic across the threads of a split launch
+        wp.launch(self._sums_kernel, dim=s.n, inputs=[s.config.dim - 1, self.centres, self.radius2, s.pos, s.vel,
+                                                      s.ptype, self._sums, self._counts], device=s.device)
+        sums = self._sums.numpy().astype(np.float64)
+        counts = self._counts.numpy()
+        vel = np.where(counts[:, None] > 0, sums / np.maximum(counts, 1)[:, None], 0.0)
+        return {"vel": vel, "count": counts}

@@ -1,0 +1,73 @@
+"""Every measurement a scene asks for, taken together at an output step: point, profile and
+gauge probes (one interpolation launch for all their points), depth-averaged columns, the wrench
+on each obstacle and its pressure-block force. Computed on the solver's device; only the results
+come to the host."""
+import numpy as np
+
+from .blocks import PressureBlockForce
+from .columns import ColumnMeans
+from .forces import BodyWrench
+from .probes import PointProbes
+from .surface import elevation, gauge_points
+
+
+class Measurements:
+    """The measurements of ``model`` (a ``scenes.build.Model``) on ``solver``."""
+
+    def __init__(self, solver, model):
+        scene, cfg = model.scene, solver.config
+        dim, up = cfg.dim, cfg.dim - 1
+        self.scene = scene
+        points, self._slices = [], {}
+        for probe in scene.probes:
+            if probe.type == "point":
+                pts = np.asarray([probe.position])
+            elif probe.type == "profile":
+                pts = np.repeat(np.asarray([probe.position]), len(probe.heights), axis=0)
+                pts[:, up] = probe.heights
+            elif probe.type == "gauge":
+                pts = gauge_points(probe.position, scene.tank[up], cfg.dx, dim)
+            else:
+                continue
+            self._slices[probe.name] = (len(points), len(points) + len(pts), pts)
+            points.extend(pts)
+        self._points = PointProbes(solver, points) if points else None
+        columns = [p for p in scene.probes if p.type == "column"]
+        self._column_names = [p.name for p in columns]
+        self._columns = (ColumnMeans(solver, [p.position for p in columns], [p.radius_dx * cfg.dx for p in columns])
+                         if columns else None)
+        self._wrenches, self._blocks = {}, {}
+        for obstacle in scene.obstacles:
+            centre = 0.5 * (np.asarray(obstacle.lo) + np.asarray(obstacle.hi))
+            if dim == 2:
+                centre[2] = 0.0
+            self._wrenches[obstacle.name] = BodyWrench(solver, model.bodies[obstacle.name], centre)
+            self._blocks[obstacle.name] = PressureBlockForce(solver, obstacle.lo, obstacle.hi, obstacle.block_offsets)
+
+    def sample(self) -> dict:
+        """{"points": {name: {vel, pressure, rho}}, "profiles": {name: {heights, vel}},
+        "gauges": {name: elevation}, "columns": {name: {vel, count}},
+        "wrenches": {name: (force, torque)}, "blocks": {name: {offset: (fx, upstream, downstream)}}}."""
+        out = {"points": {}, "profiles": {}, "gauges": {}, "columns": {}, "wrenches": {}, "blocks": {}}
+        up = self.scene.dim - 1
+        if self._points is not None:
+            values = self._points.sample()
+            for probe in self.scene.probes:
+                if probe.name not in self._slices:
+                    continue
+                a, b, pts = self._slices[probe.name]
+                if probe.type == "point":
+                    out["points"][probe.name] = {k: values[k][a] for k in ("vel", "pressure", "rho")}
+                elif probe.type == "profile":
+                    out["profiles"][probe.name] = {"heights": pts[:, up], "vel": values["vel"][a:b]}
+                else:
+                    out["gauges"][probe.name] = elevation(pts[:, up], values["weight"][a:b])
+        if self._columns is not None:
+            values = self._columns.sample()
+            for k, name in enumerate(self._column_names):
+                out["columns"][name] = {"vel": values["vel"][k], "count": int(values["count"][k])}
+        for name, wrench in self._wrenches.items():
+            out["wrenches"][name] = wrench.sample()
+        for name, blocks in self._blocks.items():
+            out["blocks"][name] = blocks.sample()
+        return out

@@ -1,0 +1,136 @@
+"""Solver output to ROS messages: particle clouds, wrenches, probe values, /clock.
+
+Topic names are the node's (``/sim_node/...`` by default; the headless runner records under the
+same names, so one analysis reads both). Stamps are simulated time. Forces on bodies are about
+the body centre, in ``frame_id`` axes.
+"""
+import array
+
+import numpy as np
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import PointStamped, Vector3Stamped, WrenchStamped
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import FluidPressure, PointCloud2, PointField
+
+# the cloud's fields after x, y, z, all float32
+PARTICLE_FIELDS = ("vx", "vy", "vz", "density", "pressure")
+_SOURCE = {"vx": ("vel", 0), "vy": ("vel", 1), "vz": ("vel", 2), "density": ("rho", None), "pressure": ("pressure", None)}
+
+
+def stamp(t: float) -> Time:
+    """Simulated time [s] as builtin_interfaces/Time."""
+    ns = int(round(t * 1e9))
+    return Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
+
+
+def clock(t: float) -> Clock:
+    return Clock(clock=stamp(t))
+
+
+class CloudBuilder:
+    """PointCloud2 messages of a fixed particle count and field list, packed from the solver's
+    arrays by numpy into one reusable float32 buffer (no per-point Python)."""
+
+    def __init__(self, n: int, fields=PARTICLE_FIELDS, frame_id: str = "world"):
+        for name in fields:
+            if name not in _SOURCE:
+                raise ValueError(f"particle_fields: {name!r} is not one of {', '.join(PARTICLE_FIELDS)}")
+        self.fields = ("x", "y", "z") + tuple(fields)
+        self.frame_id = frame_id
+        self._buffer = np.zeros((n, len(self.fields)), dtype="<f4")
+        self._layout = [PointField(name=name, offset=4 * k, datatype=PointField.FLOAT32, count=1)
+                        for k, name in enumerate(self.fields)]
+
+    def build(self, t: float, snapshot: dict) -> PointCloud2:
+        buf = self._buffer
+        buf[:, 0:3] = snapshot["pos"]
+        for k, name in enumerate(self.fields[3:], start=3):
+            key, column = _SOURCE[name]
+            buf[:, k] = snapshot[key] if column is None else snapshot[key][:, column]
+        data = array.array("B")
+        data.frombytes(buf.tobytes())
+        n, step = buf.shape[0], buf.shape[1] * 4
+        msg = PointCloud2(height=1, width=n, fields=self._layout, is_bigendian=False, point_step=step,
+                          row_step=step * n, is_dense=True)
+        msg.header.stamp = stamp(t)
+        msg.header.frame_id = self.frame_id
+        msg.data = data
+        return msg
+
+
+def cloud_arrays(msg) -> dict:
+    """The fields of a PointCloud2 of float32 fields as numpy arrays (for readers and tests)."""
+    names = [f.name for f in msg.fields]
+    values = np.frombuffer(bytes(msg.data), dtype="<f4").reshape(msg.width * msg.height, len(names))
+    return {name: values[:, k] for k, name in enumerate(names)}
+
+
+def _header(msg, t, frame_id):
+    msg.header.stamp = stamp(t)
+    msg.header.frame_id = frame_id
+    return msg
+
+
+def _vec(target, values):
+    target.x, target.y, target.z = (float(v) for v in values)
+
+
+def wrench(t, force, torque, frame_id="world") -> WrenchStamped:
+    msg = _header(WrenchStamped(), t, frame_id)
+    _vec(msg.wrench.force, force)
+    _vec(msg.wrench.torque, torque)
+    return msg
+
+
+def vector(t, values, frame_id="world") -> Vector3Stamped:
+    msg = _header(Vector3Stamped(), t, frame_id)
+    _vec(msg.vector, values)
+    return msg
+
+
+def point(t, values, frame_id="world") -> PointStamped:
+    msg = _header(PointStamped(), t, frame_id)
+    _vec(msg.point, values)
+    return msg
+
+
+def pressure(t, value, frame_id="world") -> FluidPressure:
+    msg = _header(FluidPressure(), t, frame_id)
+    msg.fluid_pressure = float(value)
+    return msg
+
+
+def block_topic(offset: float) -> str:
+    """Topic suffix of the pressure-block force at ``offset`` [m] from the faces: d060mm."""
+    return f"d{int(round(offset * 1000)):03d}mm"
+
+
+def measurement_messages(t: float, sample: dict, scene, namespace: str = "/sim_node", frame_id: str = "world"):
+    """(topic, message) pairs for one measurement sample (``measure.suite.Measurements``):
+    velocity at point probes (Vector3Stamped) and their pressure (FluidPressure), depth-averaged
+    velocity (Vector3Stamped), profile points (Vector3Stamped per height, h0, h1, ...), surface
+    elevation (PointStamped at the gauge, z = elevation), the wrench on each body about its
+    centre, and each body's pressure-block force (WrenchStamped, force.x only)."""
+    out = []
+    probes = f"{namespace}/probes"
+    for name, values in sample["points"].items():
+        out.append((f"{probes}/{name}", vector(t, values["vel"], frame_id)))
+        out.append((f"{probes}/{name}/pressure", pressure(t, values["pressure"], frame_id)))
+    for name, values in sample["columns"].items():
+        out.append((f"{probes}/{name}", vector(t, values["vel"], frame_id)))
+    for name, values in sample["profiles"].items():
+        for k, vel in enumerate(values["vel"]):
+            out.append((f"{probes}/{name}/h{k}", vector(t, vel, frame_id)))
+    up = scene.dim - 1
+    positions = {p.name: p.position for p in scene.probes}
+    for name, level in sample["gauges"].items():
+        where = list(positions[name])
+        where[up] = level
+        out.append((f"{probes}/{name}", point(t, where, frame_id)))
+    for name, (force, torque) in sample["wrenches"].items():
+        out.append((f"{namespace}/bodies/{name}/wrench", wrench(t, force, torque, frame_id)))
+    for name, by_offset in sample["blocks"].items():
+        for offset, (fx, _, _) in by_offset.items():
+            out.append((f"{namespace}/bodies/{name}/pressure_blocks/{block_topic(offset)}",
+                        wrench(t, (fx, 0.0, 0.0), (0.0, 0.0, 0.0), frame_id)))
+    return out

@@ -1,0 +1,98 @@
+"""A scene plus numerics to a solver's starting point: configuration, particles and named bodies.
+
+Fluid boxes are filled exactly (``boxes.fill_box``: top layer half a spacing below the stated
+surface, mass = rho0 x box volume). The wet bed covers the floor outside the fluid boxes'
+and obstacles' footprints, cut into rectangles that are each filled exactly. Obstacles are boxes of
+boundary particles on the dx lattice, a wall's thickness deep, each its own body.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..sph.config import SolverConfig
+from ..sph.solver import BOUNDARY, FLUID, Particles
+from .boxes import box_tank, boundary_layers, lattice
+from .schema import Scene
+
+
+@dataclass
+class Model:
+    """What a run starts from: the resolved solver configuration, the particles, and the body id
+    of each obstacle by name."""
+
+    scene: Scene
+    config: SolverConfig
+    particles: Particles
+    bodies: dict
+
+
+def _inside(pts, lo, hi, dim):
+    return np.all((pts[:, :dim] >= np.asarray(lo[:dim])) & (pts[:, :dim] <= np.asarray(hi[:dim])), axis=1)
+
+
+def floor_rectangles(extent, footprints, dim: int) -> list:
+    """The floor [0, extent] (horizontal axes) less the footprints (lo, hi), as disjoint boxes:
+    the cells of the grid through every footprint edge that no footprint covers, merged along x."""
+    axes = dim - 1
+    cuts = []
+    for ax in range(axes):
+        edges = {0.0, extent[ax]}
+        for lo, hi in footprints:
+            edges.update(min(max(c, 0.0), extent[ax]) for c in (lo[ax], hi[ax]))
+        cuts.append(sorted(edges))
+    rows = [(None, None)] if axes == 1 else list(zip(cuts[1][:-1], cuts[1][1:]))
+    out = []
+    for y0, y1 in rows:
+        run = None
+        for x0, x1 in zip(cuts[0][:-1], cuts[0][1:]):
+            centre = [0.5 * (x0 + x1)] + ([] if axes == 1 else [0.5 * (y0 + y1)])
+            covered = any(all(lo[ax] < centre[ax] < hi[ax] for ax in range(axes)) for lo, hi in footprints)
+            if covered or x1 - x0 <= 0.0:
+                if run:
+                    out.append(run)
+                run = None
+            elif run is None:
+                run = [x0, x1, y0, y1]
+            else:
+                run[1] = x1
+        if run:
+            out.append(run)
+    return [((x0,) if axes == 1 else (x0, y0), (x1,) if axes == 1 else (x1, y1)) for x0, x1, y0, y1 in out]
+
+
+def build(scene: Scene, **numerics) -> Model:
+    """The model of ``scene`` with the given numerics (``SolverConfig`` fields: dx, kernel, ...)."""
+    dim, up = scene.dim, scene.dim - 1
+    cfg = SolverConfig(dim=dim, gravity=scene.gravity, depth=scene.depth, periodic=scene.periodic,
+                       **numerics).validate()
+    dx = cfg.dx
+    boxes = [(b.lo[:dim], b.hi[:dim]) for b in scene.fluid]
+    if scene.wet_bed > 0.0:
+        footprints = [(b.lo, b.hi) for b in scene.fluid if b.lo[up] <= 0.0]
+        footprints += [(o.lo, o.hi) for o in scene.obstacles]
+        for lo, hi in floor_rectangles(scene.tank, footprints, dim):
+            boxes.append((tuple(lo) + (0.0,), tuple(hi) + (scene.wet_bed,)))
+    cfg, parts = box_tank(cfg, scene.tank[:dim], boxes, walls=scene.walls, headroom=scene.headroom)
+    keep = np.ones(len(parts), dtype=bool)
+    for o in scene.obstacles:
+        keep &= ~((parts.ptype == FLUID) & _inside(parts.pos, o.lo, o.hi, dim))
+    pos, rho, mass = [parts.pos[keep]], [parts.rho[keep]], [parts.mass[keep]]
+    ptype, body = [parts.ptype[keep]], [parts.body[keep]]
+    layers = boundary_layers(cfg.boundary, cfg.hdx)
+    bodies = {}
+    for k, o in enumerate(scene.obstacles):
+        # boundary particles on the lattice, a wall's thickness in from each side face
+        block = lattice(o.lo, o.hi, dx, dim)
+        inner_lo = [o.lo[ax] + layers * dx if ax != up else -np.inf for ax in range(dim)]
+        inner_hi = [o.hi[ax] - layers * dx if ax != up else np.inf for ax in range(dim)]
+        block = block[~_inside(block, inner_lo, inner_hi, dim)]
+        pos.append(block)
+        rho.append(np.full(len(block), cfg.rho0))  # mostly dry at the start; dynamic ones adjust
+        mass.append(np.full(len(block), cfg.rho0 * dx ** dim))
+        ptype.append(np.full(len(block), BOUNDARY))
+        body.append(np.full(len(block), k, dtype=np.int32))
+        bodies[o.name] = k
+    particles = Particles(pos=np.concatenate(pos), vel=np.zeros((sum(len(p) for p in pos), 3)),
+                          rho=np.concatenate(rho), mass=np.concatenate(mass), ptype=np.concatenate(ptype),
+                          body=np.concatenate(body))
+    return Model(scene=scene, config=cfg, particles=particles, bodies=bodies)

@@ -1,0 +1,127 @@
+"""The run configuration: numerics and output settings of one run, kept apart from the scene.
+
+Layers, later ones winning: the solver's defaults (``SolverConfig``), the scene's ``run:`` section,
+run configuration files (YAML mappings, e.g. ``config/runs/thesis_scenario1.yaml``), then
+``--set key=value`` overrides (values read as YAML: ``xsph=true``, ``dx=0.02``). Every key is
+checked: an unknown one gets the list of known ones, a value of the wrong kind says which kind.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import yaml
+
+from ..share import config_dir
+from ..sph.config import ConfigError, SolverConfig
+from .schema import Scene
+
+# SolverConfig fields that the scene decides, or that the scene builder derives
+SCENE_FIELDS = ("dim", "gravity", "depth", "domain_lo", "domain_hi", "periodic", "planes")
+NUMERIC_FIELDS = tuple(f.name for f in dataclasses.fields(SolverConfig) if f.name not in SCENE_FIELDS)
+
+
+@dataclass
+class Output:
+    """When a run stops and what it writes. Probes, wrenches and /clock go out at ``output_rate``;
+    particle clouds at ``particle_rate`` (0 = none), on the output steps nearest that rate."""
+
+    end_time: float = 1.0  # [s] simulated
+    output_rate: float = 100.0  # [Hz] simulated (the thesis's DamBreak 1 rate)
+    particle_rate: float = 10.0  # [Hz] simulated
+
+    @property
+    def particle_every(self) -> int:
+        """Outputs between two particle clouds (0 = no clouds)."""
+        return 0 if self.particle_rate == 0.0 else max(1, int(round(self.output_rate / self.particle_rate)))
+
+
+OUTPUT_FIELDS = tuple(f.name for f in dataclasses.fields(Output))
+RUN_KEYS = NUMERIC_FIELDS + OUTPUT_FIELDS
+_DEFAULTS = {**{f.name: f.default for f in dataclasses.fields(SolverConfig) if f.name in NUMERIC_FIELDS},
+             **{f.name: f.default for f in dataclasses.fields(Output)}}
+
+
+@dataclass
+class RunConfig:
+    numerics: dict  # SolverConfig fields
+    output: Output
+
+    def as_dict(self) -> dict:
+        return {**self.numerics, **dataclasses.asdict(self.output)}
+
+
+def run_config_names() -> list:
+    return sorted(p.stem for p in config_dir("runs").glob("*.yaml"))
+
+
+def read_run_file(name_or_path) -> dict:
+    """A run configuration file: a path, or a name from config/runs."""
+    path = Path(name_or_path)
+    if not path.suffix and (config_dir("runs") / f"{name_or_path}.yaml").is_file():
+        path = config_dir("runs") / f"{name_or_path}.yaml"
+    if not path.is_file():
+        raise ConfigError("run_config", str(name_or_path),
+                          "a run configuration (" + ", ".join(run_config_names()) + ") or a path to a YAML file")
+    try:
+        data = yaml.safe_load(path.read_text()) or {}
+    except yaml.YAMLError as err:
+        raise ConfigError("run_config", str(path), f"valid YAML ({err})") from None
+    if not isinstance(data, dict):
+        raise ConfigError("run_config", str(path), "a YAML mapping of run settings")
+    return data
+
+
+def parse_set(item: str) -> tuple:
+    """``key=value`` with the value read as YAML."""
+    key, sep, value = item.partition("=")
+    if not sep or not key.strip():
+        raise ConfigError("--set", item, "key=value, e.g. dx=0.02 or kernel=quadratic")
+    try:
+        return key.strip(), yaml.safe_load(value)
+    except yaml.YAMLError:
+        return key.strip(), value
+
+
+def _coerce(key, value):
+    default = _DEFAULTS[key]
+    if isinstance(default, bool):
+        if not isinstance(value, bool):
+            raise ConfigError(key, value, "true or false")
+    elif isinstance(default, int):
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ConfigError(key, value, "an integer")
+    elif isinstance(default, float):
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ConfigError(key, value, "a number")
+        value = float(value)
+    elif isinstance(default, str) and not isinstance(value, str):
+        raise ConfigError(key, value, "a name (string)")
+    return value
+
+
+def resolve(scene: Scene, files=(), sets=(), **overrides) -> RunConfig:
+    """The run configuration of ``scene``: its run section, then ``files``, then ``sets``
+    (``key=value`` strings), then keyword ``overrides``."""
+    layers = [scene.run] + [read_run_file(f) for f in files] + [dict(parse_set(s) for s in sets), overrides]
+    merged = {}
+    for layer in layers:
+        for key, value in layer.items():
+            if key not in RUN_KEYS:
+                hint = " (set by the scene)" if key in SCENE_FIELDS else ""
+                raise ConfigError(key, value, "a run setting" + hint + "; the settings are " + ", ".join(RUN_KEYS))
+            merged[key] = _coerce(key, value)
+    output = Output(**{k: merged.pop(k) for k in OUTPUT_FIELDS if k in merged})
+    if not (math.isfinite(output.end_time) and output.end_time > 0.0):
+        raise ConfigError("end_time", output.end_time, "a time > 0 [s]")
+    if not (math.isfinite(output.output_rate) and output.output_rate > 0.0):
+        raise ConfigError("output_rate", output.output_rate, "a rate > 0 [Hz]")
+    if not (math.isfinite(output.particle_rate) and 0.0 <= output.particle_rate <= output.output_rate):
+        raise ConfigError("particle_rate", output.particle_rate,
+                          f"a rate from 0 (no particle clouds) to output_rate ({output.output_rate:g} Hz)")
+    numerics = {k: merged[k] for k in NUMERIC_FIELDS if k in merged}
+    SolverConfig(dim=scene.dim, gravity=scene.gravity, depth=scene.depth, periodic=scene.periodic,
+                 **numerics).validate()
+    return RunConfig(numerics=numerics, output=output)

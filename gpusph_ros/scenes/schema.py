@@ -1,0 +1,268 @@
+"""Scene files: the YAML schema of a scene, read and checked into plain data.
+
+A scene is geometry and gauges only: the tank, the water, the obstacles and where to measure.
+Numerics (dx, kernel, viscosity, boundary model, precision, CFL, output rate, end time, ...) come
+from the run configuration (``run.py``); a scene may suggest run settings under ``run:`` (its end
+time, say) that a run configuration or a ``--set`` overrides.
+
+Conventions: SI units; the tank is the open-top box [0, tank]; the vertical axis is the last one
+(y in 2D, z in 3D) and gravity points down it. Points are written with ``dim`` components.
+Every problem raises ``ConfigError`` naming the field (``fluid[1].hi``), its value and what is
+allowed, so one message tells a user what to change.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import yaml
+
+from ..share import config_dir
+from ..sph.config import ConfigError
+from .boxes import WALL_KINDS, wall_faces
+
+PROBE_TYPES = ("point", "column", "profile", "gauge")
+SCENE_KEYS = ("name", "description", "source", "dim", "tank", "headroom", "gravity", "depth", "periodic",
+              "walls", "fluid", "wet_bed", "obstacles", "probes", "run")
+
+
+@dataclass
+class Box:
+    """A named axis-aligned box [lo, hi] (3-vectors; z = 0 and unused in 2D)."""
+
+    name: str
+    lo: tuple
+    hi: tuple
+
+
+@dataclass
+class Obstacle(Box):
+    """A fixed box of boundary particles whose wrench is reported; ``block_offsets`` [m] are the
+    distances from its upstream and downstream faces at which the thesis's pressure blocks sit."""
+
+    block_offsets: tuple = (0.0, 0.06)
+
+
+@dataclass
+class Probe:
+    """A named gauge. ``point``: kernel-interpolated values at ``position``; ``column``: mean
+    velocity of the fluid in a vertical column of radius ``radius_dx`` spacings around the
+    horizontal ``position``; ``profile``: point values at ``heights`` above the floor there;
+    ``gauge``: free-surface elevation there. ``position`` is always stored as a 3-vector."""
+
+    name: str
+    type: str
+    position: tuple
+    radius_dx: float = 3.0
+    heights: tuple = ()
+
+
+@dataclass
+class Scene:
+    name: str
+    dim: int
+    tank: tuple
+    gravity: tuple
+    depth: float
+    fluid: list
+    description: str = ""
+    source: str = ""
+    headroom: float = 0.5
+    periodic: tuple = (False, False, False)
+    walls: dict = field(default_factory=dict)
+    wet_bed: float = 0.0
+    obstacles: list = field(default_factory=list)
+    probes: list = field(default_factory=list)
+    run: dict = field(default_factory=dict)
+    text: str = ""  # the file as written, recorded with each run
+
+
+def builtin_names() -> list:
+    """The scenes shipped in config/scenes."""
+    return sorted(p.stem for p in config_dir("scenes").glob("*.yaml"))
+
+
+def load_scene(name_or_path) -> Scene:
+    """A scene from a built-in name (``builtin_names()``) or a YAML file path."""
+    path = Path(name_or_path)
+    if not path.suffix and (config_dir("scenes") / f"{name_or_path}.yaml").is_file():
+        path = config_dir("scenes") / f"{name_or_path}.yaml"
+    if not path.is_file():
+        raise ConfigError("scene", str(name_or_path),
+                          "a built-in scene (" + ", ".join(builtin_names()) + ") or a path to a YAML scene file")
+    text = path.read_text()
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as err:
+        raise ConfigError("scene", str(path), f"valid YAML ({err})") from None
+    scene = parse_scene(data, default_name=path.stem)
+    scene.text = text
+    return scene
+
+
+# -- field readers: each names the field it reads ------------------------------------------
+def _number(where, value, lo=-math.inf, hi=math.inf, lo_open=False):
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    if ok:
+        ok = (value > lo if lo_open else value >= lo) and value <= hi
+    if not ok:
+        bound = []
+        if lo > -math.inf:
+            bound.append(("> " if lo_open else ">= ") + f"{lo:g}")
+        if hi < math.inf:
+            bound.append(f"<= {hi:g}")
+        raise ConfigError(where, value, "a finite number" + (" " + " and ".join(bound) if bound else ""))
+    return float(value)
+
+
+def _vector(where, value, length, lo=-math.inf):
+    if not isinstance(value, (list, tuple)) or len(value) != length:
+        raise ConfigError(where, value, f"a list of {length} numbers")
+    return tuple(_number(f"{where}[{k}]", c, lo=lo) for k, c in enumerate(value))
+
+
+def _pad3(vec):
+    return tuple(vec) + (0.0,) * (3 - len(vec))
+
+
+def _mapping(where, value, keys, required=()):
+    if not isinstance(value, dict):
+        raise ConfigError(where, value, "a mapping with keys " + ", ".join(keys))
+    for key in value:
+        if key not in keys:
+            raise ConfigError(f"{where}.{key}" if where else str(key), value[key],
+                              "no such field; the fields are " + ", ".join(keys))
+    for key in required:
+        if key not in value:
+            raise ConfigError(f"{where}.{key}" if where else key, None, "a value (this field is required)")
+    return value
+
+
+def _name(where, value):
+    if not isinstance(value, str) or not value.replace("_", "").isalnum() or not value[0].isalpha():
+        raise ConfigError(where, value, "a name of letters, digits and _ starting with a letter (used in topic names)")
+    return value
+
+
+def _inside(where, point, tank, dim):
+    for ax in range(dim):
+        if not 0.0 <= point[ax] <= tank[ax]:
+            raise ConfigError(where, point[:dim], f"a point inside the tank [0, {list(tank[:dim])}]")
+
+
+def _box(where, value, tank, dim, extra_keys=()):
+    item = _mapping(where, value, ("name", "lo", "hi") + extra_keys, required=("name", "lo", "hi"))
+    name = _name(f"{where}.name", item["name"])
+    lo = _pad3(_vector(f"{where}.lo", item["lo"], dim))
+    hi = _pad3(_vector(f"{where}.hi", item["hi"], dim))
+    for ax in range(dim):
+        if hi[ax] <= lo[ax]:
+            raise ConfigError(f"{where}.hi", list(hi[:dim]), f"every component above lo {list(lo[:dim])}")
+    _inside(f"{where}.lo", lo, tank, dim)
+    _inside(f"{where}.hi", hi, tank, dim)
+    return item, name, lo, hi
+
+
+def _unique(where, names):
+    seen = set()
+    for k, name in enumerate(names):
+        if name in seen:
+            raise ConfigError(f"{where}[{k}].name", name, "a name not used by another entry")
+        seen.add(name)
+
+
+def parse_scene(data, default_name: str = "scene") -> Scene:
+    """Check a scene read from YAML (a dict) and return it as a ``Scene``."""
+    data = _mapping("", data, SCENE_KEYS, required=("dim", "tank", "fluid"))
+    dim = data["dim"]
+    if dim not in (2, 3) or isinstance(dim, bool):
+        raise ConfigError("dim", dim, "2 or 3")
+    up = dim - 1
+    tank = _pad3(_vector("tank", data["tank"], dim, lo=0.0))
+    if min(tank[:dim]) <= 0.0:
+        raise ConfigError("tank", list(tank[:dim]), "a list of lengths > 0 [m]")
+    default_g = [0.0] * dim
+    default_g[up] = -9.81
+    gravity = _pad3(_vector("gravity", data.get("gravity", default_g), dim))
+    if gravity[up] >= 0.0 or any(gravity[ax] != 0.0 for ax in range(dim) if ax != up):
+        raise ConfigError("gravity", list(gravity[:dim]),
+                          f"a vector pointing down the vertical axis ({'xyz'[up]}), e.g. {default_g}")
+    headroom = _number("headroom", data.get("headroom", 0.5), lo=0.0)
+    periodic = data.get("periodic", [False] * dim)
+    if (not isinstance(periodic, list) or len(periodic) != dim
+            or not all(isinstance(p, bool) for p in periodic) or periodic[up]):
+        raise ConfigError("periodic", periodic, f"a list of {dim} booleans, false for the vertical axis")
+    periodic = tuple(periodic) + (False,) * (3 - dim)
+
+    faces = wall_faces(dim)
+    walls_in = data.get("walls", "particles")
+    if isinstance(walls_in, str):
+        walls_in = {face: walls_in for face in faces}
+    walls_in = _mapping("walls", walls_in, faces)
+    walls = {}
+    for face in faces:
+        kind = walls_in.get(face, "particles")
+        if kind not in WALL_KINDS:
+            raise ConfigError(f"walls.{face}", kind, "one of " + ", ".join(WALL_KINDS))
+        walls[face] = kind
+
+    fluid_in = data["fluid"]
+    if not isinstance(fluid_in, list) or not fluid_in:
+        raise ConfigError("fluid", fluid_in, "a list of at least one box {name, lo, hi}")
+    fluid = []
+    for k, item in enumerate(fluid_in):
+        _, name, lo, hi = _box(f"fluid[{k}]", item, tank, dim)
+        fluid.append(Box(name, lo, hi))
+    _unique("fluid", [b.name for b in fluid])
+    surface = max(b.hi[up] for b in fluid)
+    depth = _number("depth", data.get("depth", surface), lo=0.0, lo_open=True)
+    wet_bed = _number("wet_bed", data.get("wet_bed", 0.0), lo=0.0, hi=tank[up])
+
+    obstacles = []
+    for k, item in enumerate(data.get("obstacles") or []):
+        where = f"obstacles[{k}]"
+        item, name, lo, hi = _box(where, item, tank, dim, extra_keys=("block_offsets",))
+        offsets = item.get("block_offsets", [0.0, 0.06])
+        if not isinstance(offsets, list):
+            raise ConfigError(f"{where}.block_offsets", offsets, "a list of distances >= 0 [m]")
+        offsets = tuple(_number(f"{where}.block_offsets[{j}]", o, lo=0.0) for j, o in enumerate(offsets))
+        if lo[up] > 0.0:
+            raise ConfigError(f"{where}.lo", list(lo[:dim]), "a box standing on the floor (lo on the vertical axis 0)")
+        obstacles.append(Obstacle(name, lo, hi, offsets))
+    _unique("obstacles", [o.name for o in obstacles])
+
+    probes = []
+    probes_in = data.get("probes") or {}
+    if not isinstance(probes_in, dict):
+        raise ConfigError("probes", probes_in, "a mapping from probe name to {type, position, ...}")
+    for name, item in probes_in.items():
+        where = f"probes.{name}"
+        _name(where, name)
+        item = _mapping(where, item, ("type", "position", "radius_dx", "heights"), required=("type", "position"))
+        kind = item["type"]
+        if kind not in PROBE_TYPES:
+            raise ConfigError(f"{where}.type", kind, "one of " + ", ".join(PROBE_TYPES))
+        length = dim if kind == "point" else dim - 1
+        position = _pad3(_vector(f"{where}.position", item["position"], length))
+        _inside(f"{where}.position", position, tank, length)
+        radius = _number(f"{where}.radius_dx", item.get("radius_dx", 3.0), lo=0.0, lo_open=True)
+        heights = ()
+        if kind == "profile":
+            raw = item.get("heights")
+            if not isinstance(raw, list) or not raw:
+                raise ConfigError(f"{where}.heights", raw, "a list of heights above the floor [m]")
+            heights = tuple(_number(f"{where}.heights[{j}]", z, lo=0.0, hi=tank[up]) for j, z in enumerate(raw))
+        elif "heights" in item:
+            raise ConfigError(f"{where}.heights", item["heights"], "no heights: only profile probes take them")
+        probes.append(Probe(name, kind, position, radius, heights))
+
+    run = data.get("run") or {}
+    if not isinstance(run, dict):
+        raise ConfigError("run", run, "a mapping of run settings (see the run configuration)")
+    name = data.get("name", default_name)
+    _name("name", name)
+    return Scene(name=name, dim=dim, tank=tank, gravity=gravity, depth=depth, fluid=fluid,
+                 description=str(data.get("description", "")).strip(), source=str(data.get("source", "")).strip(),
+                 headroom=headroom, periodic=periodic, walls=walls, wet_bed=wet_bed, obstacles=obstacles,
+                 probes=probes, run=dict(run))
