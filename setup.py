@@ -35,6 +35,8 @@ setup(
     entry_points={
         'console_scripts': [
             'sim_node = gpusph_ros.ros.sim_node:main',
+            'gpusph-run = gpusph_ros.cli:run_main',
+            'gpusph-analyze = gpusph_ros.cli:analyze_main',
         ],
     },
 )

@@ -26,7 +26,7 @@ def main():
     parser.add_argument("--precision", default="float32")
     parser.add_argument("--device", default="cpu")
     args = parser.parse_args()
-    wp.config.quiet = True
+    wp.config.log_level = wp.LOG_WARNING  # no per-module load lines
     table = np.loadtxt(TABLE)
     points = table[(table[:, 0] >= 1.0) & (table[:, 0] <= 2.55)]
     rate = np.sqrt(2 * 9.81 / WIDTH)

@@ -57,7 +57,7 @@ def main():
     parser.add_argument("--seconds", type=float, default=20.0, help="wall-clock time measured per case")
     parser.add_argument("--start", type=float, default=0.05, help="simulated time run untimed first [s]")
     args = parser.parse_args()
-    wp.config.quiet = True
+    wp.config.log_level = wp.LOG_WARNING  # no per-module load lines
     header = (f"{'device':8s} {'precision':9s} {'dx [m]':>7s} {'particles':>10s} {'fluid':>8s} {'nbrs':>6s} "
               f"{'steps':>6s} {'steps/s':>8s} {'MIPPS':>7s} {'interactions/s':>15s} {'rebuilds':>8s}")
     print("DamBreak 1 (Yeh & Petroff / GPUSPH DamBreak3D), default numerics: "

@@ -1,57 +1,114 @@
-"""Headless entry points: run a built-in scene with a progress line."""
+"""Headless entry points.
+
+    gpusph-run SCENE [--run-config NAME|FILE ...] [--set key=value ...] --out DIR
+    gpusph-analyze DIR [--charts DIR] [--shared DIR]
+
+(also ``python -m gpusph_ros.cli run|analyze ...``). SCENE is a built-in scene name or a YAML
+file; run settings layer as scenes.run describes. Exit status: 0 done, 2 the run failed a
+health check or was interrupted (its recording is closed and readable), 1 bad input.
+"""
 import argparse
+import signal
 import sys
 import time
 
-import numpy as np
 
-SURGE_LEVEL = 0.05  # [m] above the 0.01 m wet bed of DamBreak 1
+def _progress(run, stream=sys.stdout):
+    """One progress line per call, rewritten in place on a terminal."""
+    solver, end = run.solver, run.output.end_time
+    frac = min(1.0, solver.time / end)
+    bar = "#" * int(30 * frac) + "." * (30 - int(30 * frac))
+    rate = solver.steps / max(run.wall, 1e-9)
+    eta = run.wall / max(frac, 1e-9) * (1.0 - frac)
+    line = (f"[{bar}] t = {solver.time:7.3f} / {end:g} s  {solver.steps:7d} steps  {rate:6.1f} steps/s  "
+            f"{run.mipps():5.3f} MIPPS  ETA {eta:6.0f} s")
+    tty = stream.isatty()
+    last = run.done
+    # off a terminal, print about every 5% so logs stay short
+    step = max(1, run.n_outputs // 20)
+    if tty or last or run.next_output % step == 0:
+        stream.write(("\r" if tty else "") + line + ("\n" if (last or not tty) else ""))
+        stream.flush()
 
 
-def _run(args):
+def _sigterm(signum, frame):
+    raise KeyboardInterrupt
+
+
+def run_main(argv=None):
+    parser = argparse.ArgumentParser(prog="gpusph-run", description="Run a scene headless and record it to MCAP.")
+    parser.add_argument("scene", help="built-in scene name or path to a scene YAML file")
+    parser.add_argument("--run-config", action="append", default=[], metavar="NAME|FILE",
+                        help="run configuration(s), later ones winning (e.g. thesis_scenario1)")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override one run setting")
+    parser.add_argument("--out", required=True, help="bag directory to create (must not exist or be empty)")
+    parser.add_argument("--quiet", action="store_true", help="no progress output")
+    args = parser.parse_args(argv)
+
     import warp as wp
 
-    wp.config.quiet = True
-    from .scenes.dambreak import dambreak1
-    from .sph import HealthError, Solver
+    wp.config.log_level = wp.LOG_WARNING  # no per-module load lines
+    from .runner import Run
+    from .scenes.run import resolve
+    from .scenes.schema import load_scene
+    from .sph import ConfigError
 
-    overrides = {"precision": args.precision, "device": args.device}
-    cfg, parts = dambreak1(args.dx, **overrides)
-    solver = Solver(cfg, parts)
-    n_fluid = int((parts.ptype == 0).sum())
-    print(f"{args.scene}: dx = {args.dx} m, {solver.n} particles ({n_fluid} fluid), {cfg.kernel} kernel, "
-          f"{cfg.viscosity} viscosity, {cfg.boundary} boundaries, {cfg.precision} on {solver.device}", flush=True)
-    start = time.perf_counter()
     try:
-        for t in np.arange(args.output, args.end_time + 1e-9, args.output):
-            solver.advance(float(t))
-            wall = time.perf_counter() - start
-            snap = solver.snapshot()
-            # the surge front: the farthest fluid above the wet bed
-            surge = (snap["ptype"] == 0) & (snap["pos"][:, 2] > SURGE_LEVEL)
-            front = snap["pos"][surge, 0].max()
-            mipps = solver.n * solver.steps / wall / 1e6
-            eta = wall / solver.time * (args.end_time - solver.time)
-            print(f"t = {solver.time:6.3f} s  steps {solver.steps:6d}  {solver.steps / wall:6.1f} steps/s  "
-                  f"{mipps:5.3f} MIPPS  surge front x = {front:5.3f} m  ETA {eta:5.0f} s", flush=True)
-    except HealthError as err:
-        print(f"stopped: {err}", file=sys.stderr)
-        return 2
+        scene = load_scene(args.scene)
+        config = resolve(scene, files=args.run_config, sets=args.set)
+        run = Run(scene, config)
+        recorder = run.open_recording(args.out)
+    except (ConfigError, FileExistsError, ValueError) as err:
+        print(f"gpusph-run: {err}", file=sys.stderr)
+        return 1
+    cfg = run.model.config
+    fluid = int((run.model.particles.ptype == 0).sum())
+    print(f"{scene.name}: dx = {cfg.dx:g} m, {run.solver.n:,} particles ({fluid:,} fluid), {cfg.kernel} kernel, "
+          f"{cfg.viscosity} viscosity, {cfg.boundary} boundaries, {cfg.precision} on {run.solver.device}; "
+          f"to t = {run.output.end_time:g} s, outputs at {run.output.output_rate:g} Hz -> {args.out}", flush=True)
+    signal.signal(signal.SIGTERM, _sigterm)
+    start = time.perf_counter()
+    result = run.execute(recorder, progress=None if args.quiet else _progress)
+    print(f"{result['status']}: {result['steps']} steps, t = {result['simulated_time_s']:.4g} s, wall "
+          f"{time.perf_counter() - start:.1f} s, {result['mipps']} MIPPS; recorded {recorder.count} messages "
+          f"to {args.out}", flush=True)
+    return 0 if result["status"] == "completed" else 2
+
+
+def analyze_main(argv=None):
+    parser = argparse.ArgumentParser(prog="gpusph-analyze",
+                                     description="The thesis's metrics of a recording beside the experiment and GPUSPH.")
+    parser.add_argument("recording", help="bag directory written by gpusph-run or sim_node")
+    parser.add_argument("--charts", help="where metrics.json and the PNG charts go (default: DIR/analysis)")
+    parser.add_argument("--shared", help="the shared reference folder (default: $GPUSPH_ROS_SHARED or ../shared)")
+    parser.add_argument("--no-charts", action="store_true")
+    args = parser.parse_args(argv)
+    from pathlib import Path
+
+    from .analysis import report as R
+
+    try:
+        rep, curves = R.analyse(args.recording, Path(args.shared) if args.shared else None)
+    except (FileNotFoundError, KeyError) as err:
+        print(f"gpusph-analyze: {err}", file=sys.stderr)
+        return 1
+    print(R.table(rep))
+    out = Path(args.charts) if args.charts else Path(args.recording) / "analysis"
+    path = R.write(rep, out)
+    written = [] if args.no_charts else R.charts(rep, curves, out)
+    print(f"\nmetrics: {path}" + ("".join(f"\nchart: {w}" for w in written)))
+    if not rep["complete"]:
+        print("note: the recording ends mid-file (a killed run); metrics cover what it holds")
     return 0
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(prog="gpusph_ros.cli", description=__doc__)
-    sub = parser.add_subparsers(dest="command", required=True)
-    run = sub.add_parser("run", help="run a built-in scene headless")
-    run.add_argument("scene", choices=["dambreak3d"], help="DamBreak 1 of the thesis (Yeh & Petroff)")
-    run.add_argument("--dx", type=float, default=0.03, help="particle spacing [m]")
-    run.add_argument("--end-time", type=float, default=0.5, help="simulated end time [s]")
-    run.add_argument("--output", type=float, default=0.05, help="progress interval, simulated [s]")
-    run.add_argument("--precision", choices=["float32", "float64"], default="float32")
-    run.add_argument("--device", default="cpu", help="Warp device: cpu or cuda:N")
-    args = parser.parse_args(argv)
-    return _run(args)
+    argv = sys.argv[1:] if argv is None else argv
+    commands = {"run": run_main, "analyze": analyze_main}
+    if not argv or argv[0] not in commands:
+        print("usage: python -m gpusph_ros.cli {run,analyze} ...", file=sys.stderr)
+        return 1
+    return commands[argv[0]](argv[1:])
 
 
 if __name__ == "__main__":

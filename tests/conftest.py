@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 import warp as wp
 
-wp.config.quiet = True
+wp.config.log_level = wp.LOG_WARNING
 
 REPO = Path(__file__).resolve().parents[1]
 SHARED = REPO.parent / "shared"

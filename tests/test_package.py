@@ -32,6 +32,17 @@ def test_setup_installs_the_ament_marker_manifest_and_config(tmp_path):
         if cfg.is_file():
             assert (prefix / "share/gpusph_ros" / cfg.relative_to(REPO)).is_file(), cfg
     assert (prefix / "lib/gpusph_ros/sim_node").is_file()
+    for script in ("gpusph-run", "gpusph-analyze"):
+        assert (prefix / "lib/gpusph_ros" / script).is_file(), script
+    # the installed package finds its scenes and run configurations under <prefix>/share
+    site = next(prefix.glob("lib/python*/site-packages"))
+    code = ("from gpusph_ros.scenes.schema import builtin_names; from gpusph_ros.scenes.run import run_config_names; "
+            "import gpusph_ros.share as s; print(s.config_dir('scenes')); print(builtin_names(), run_config_names())")
+    found = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True,
+                           env={"PYTHONPATH": str(site), "PATH": "/usr/bin:/bin"})
+    assert found.returncode == 0, found.stderr[-2000:]
+    assert str(prefix / "share/gpusph_ros/config/scenes") in found.stdout
+    assert "dambreak1_thesis" in found.stdout and "thesis_scenario1" in found.stdout
 
 
 def test_setup_cfg_puts_scripts_where_ros2_run_looks():

@@ -1,0 +1,1 @@
+"""Analysis of recordings: read MCAP, the thesis's metrics, comparison with GPUSPH and experiment, charts."""

@@ -1,0 +1,108 @@
+"""Reading a recording back: the run's metadata and every measurement topic as time series.
+
+Reads the MCAP file as a stream, record by record, so that a file cut short by a killed run
+yields every message up to its last complete chunk. Particle clouds are kept as raw bytes and
+decoded on request.
+"""
+import importlib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import yaml
+from mcap.exceptions import McapError
+from mcap.records import Channel, Message, Metadata, Schema
+from mcap.stream_reader import StreamReader
+from rclpy.serialization import deserialize_message
+
+
+def mcap_file(path) -> Path:
+    """The .mcap file of a bag directory (or the file itself)."""
+    path = Path(path)
+    if path.is_file():
+        return path
+    files = sorted(path.glob("*.mcap"))
+    if not files:
+        raise FileNotFoundError(f"{path}: no .mcap file here; expected a recording made by gpusph-run or sim_node")
+    return files[0]
+
+
+def _message_class(type_name: str):
+    package, _, name = type_name.partition("/msg/")
+    return getattr(importlib.import_module(f"{package}.msg"), name)
+
+
+@dataclass
+class Recording:
+    metadata: dict = field(default_factory=dict)  # the run's description, decoded YAML where it is YAML
+    result: dict = field(default_factory=dict)  # status, wall time, ... (absent if the run was killed)
+    types: dict = field(default_factory=dict)  # topic -> pkg/msg/Type
+    series: dict = field(default_factory=dict)  # topic -> {"t": array, ...} for the small messages
+    clouds: list = field(default_factory=list)  # (t, raw CDR bytes) of the particle clouds
+    clock: list = field(default_factory=list)  # the /clock times
+    complete: bool = True  # False when the file ended mid-record (a killed run)
+
+    def topic(self, suffix: str) -> dict:
+        """The series of the topic ending in ``suffix`` (e.g. 'probes/velocity')."""
+        for name, values in self.series.items():
+            if name.endswith("/" + suffix.lstrip("/")):
+                return values
+        raise KeyError(f"no topic ending in {suffix!r}; the recording has " + ", ".join(sorted(self.series)))
+
+    def cloud(self, k: int):
+        """Particle cloud ``k`` as a PointCloud2 message."""
+        from sensor_msgs.msg import PointCloud2
+        return deserialize_message(self.clouds[k][1], PointCloud2)
+
+
+def _values(msg) -> dict:
+    """The numbers a measurement message carries."""
+    kind = type(msg).__name__
+    if kind == "Vector3Stamped":
+        return {"v": (msg.vector.x, msg.vector.y, msg.vector.z)}
+    if kind == "PointStamped":
+        return {"v": (msg.point.x, msg.point.y, msg.point.z)}
+    if kind == "WrenchStamped":
+        f, m = msg.wrench.force, msg.wrench.torque
+        return {"force": (f.x, f.y, f.z), "torque": (m.x, m.y, m.z)}
+    if kind == "FluidPressure":
+        return {"v": msg.fluid_pressure}
+    return {}
+
+
+def read(path) -> Recording:
+    rec = Recording()
+    schemas, channels, rows = {}, {}, {}
+    with open(mcap_file(path), "rb") as stream:
+        try:
+            for record in StreamReader(stream).records:
+                if isinstance(record, Schema):
+                    schemas[record.id] = record.name
+                elif isinstance(record, Channel):
+                    channels[record.id] = (record.topic, schemas[record.schema_id])
+                    rec.types[record.topic] = schemas[record.schema_id]
+                elif isinstance(record, Metadata):
+                    target = rec.result if record.name == "gpusph_ros.result" else rec.metadata
+                    target.update(record.metadata)
+                elif isinstance(record, Message):
+                    topic, type_name = channels[record.channel_id]
+                    t = record.log_time * 1e-9
+                    if type_name == "sensor_msgs/msg/PointCloud2":
+                        rec.clouds.append((t, record.data))
+                    elif type_name == "rosgraph_msgs/msg/Clock":
+                        rec.clock.append(t)
+                    else:
+                        msg = deserialize_message(record.data, _message_class(type_name))
+                        rows.setdefault(topic, []).append((t, _values(msg)))
+        except (McapError, EOFError, ValueError, KeyError, IndexError) as err:
+            rec.complete = False
+            rec.metadata.setdefault("read_error", f"the file ends mid-record ({type(err).__name__}): a killed run")
+    for key in ("run_config", "versions", "bodies"):
+        if key in rec.metadata:
+            rec.metadata[key] = yaml.safe_load(rec.metadata[key])
+    for topic, items in rows.items():
+        series = {"t": np.array([t for t, _ in items])}
+        for name in items[0][1]:
+            series[name] = np.array([v[name] for _, v in items], dtype=np.float64)
+        rec.series[topic] = series
+    return rec

@@ -1,0 +1,76 @@
+"""The thesis's metrics (Section 4), as plain functions of time series.
+
+- moving_average: the 0.04 s moving time average applied to every numerical series (4.2.1).
+- percent_error: Eq. 4.1, (numerical - experimental) / experimental x 100.
+- peak and align_to: peak value and time; the numerical series is shifted in time so that its
+  peak falls at the experimental peak's time, as the thesis did for velocity and force (4.2.1-2).
+- rms_error: RMS of numerical minus experimental at the experimental points' times (4.2.1-2).
+- forward_return: max forward and max return velocity and their time difference (4.2.3, point D).
+- bore_arrival: the time of greatest acceleration (4.3.1), and mean_behind: the mean over the 6 s
+  behind it (3.3).
+"""
+import numpy as np
+
+THESIS_WINDOW = 0.04  # [s] moving average (thesis 4.2.1)
+BORE_WINDOW = 6.0  # [s] mean behind the bore (thesis 3.3)
+
+
+def moving_average(t, y, window: float = THESIS_WINDOW):
+    """Centred moving average over ``window`` seconds (samples with |t_j - t_i| <= window/2);
+    works for uneven sampling."""
+    t, y = np.asarray(t, dtype=np.float64), np.asarray(y, dtype=np.float64)
+    order = np.argsort(t, kind="stable")
+    t, y = t[order], y[order]
+    csum = np.concatenate([[0.0], np.cumsum(y)])
+    lo = np.searchsorted(t, t - 0.5 * window - 1e-12, side="left")
+    hi = np.searchsorted(t, t + 0.5 * window + 1e-12, side="right")
+    return t, (csum[hi] - csum[lo]) / (hi - lo)
+
+
+def percent_error(numerical: float, experimental: float) -> float:
+    return (numerical - experimental) / experimental * 100.0
+
+
+def peak(t, y):
+    """(time, value) of the maximum."""
+    k = int(np.argmax(y))
+    return float(t[k]), float(y[k])
+
+
+def align_to(t, y, t_ref_peak: float):
+    """``t`` shifted so that the peak of ``y`` falls at ``t_ref_peak``."""
+    return np.asarray(t) + (t_ref_peak - peak(t, y)[0])
+
+
+def rms_error(t, y, t_exp, y_exp) -> float:
+    """RMS of the numerical series (interpolated) minus the experimental points, over the points
+    that fall within the numerical series' span; NaN if none does."""
+    t_exp, y_exp = np.asarray(t_exp), np.asarray(y_exp)
+    inside = (t_exp >= t[0]) & (t_exp <= t[-1])
+    if not inside.any():
+        return float("nan")
+    diff = np.interp(t_exp[inside], t, y) - y_exp[inside]
+    return float(np.sqrt(np.mean(diff ** 2)))
+
+
+def forward_return(t, u):
+    """Max forward velocity, the max return (most negative) velocity after it, and the time
+    between them."""
+    k = int(np.argmax(u))
+    j = k + int(np.argmin(u[k:]))
+    return {"max_forward": float(u[k]), "t_forward": float(t[k]), "max_return": float(u[j]),
+            "t_return": float(t[j]), "time_difference": float(t[j] - t[k])}
+
+
+def bore_arrival(t, u) -> float:
+    """Time of the greatest acceleration (end of the steepest rise between two outputs)."""
+    accel = np.diff(u) / np.diff(t)
+    return float(t[int(np.argmax(accel)) + 1])
+
+
+def mean_behind(t, u, start: float, window: float = BORE_WINDOW):
+    """Mean of ``u`` over [start, start + window], and the length of record it actually covered."""
+    inside = (t >= start) & (t <= start + window)
+    if not inside.any():
+        return float("nan"), 0.0
+    return float(np.mean(u[inside])), float(t[inside][-1] - start)

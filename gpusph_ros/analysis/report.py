@@ -1,0 +1,271 @@
+"""A recording's metrics in the thesis's form, beside the experiment and GPUSPH (thesis, same dx
+and scenario), as a JSON record, a printed table and PNG charts.
+
+DamBreak 1 (scenes dambreak1_*; thesis 4.2): peak x-velocity at the probe and its RMS error
+against Yeh & Petroff's points; peak x-force on the obstruction from pressure blocks at its faces
+and 0.06 m away, the RMS error of the latter against the measured force; the peak of the net force
+on the obstruction's particles (what GPUSPH's and DualSPHysics' own force output give); max
+forward and return velocity at point D and the time between them. All series get the 0.04 s
+moving average; velocity and force are shifted so their peaks meet the experiment's (the
+thesis's alignment), point D is not. DamBreak 2 (dambreak2_*; thesis 4.3): bore arrival (greatest
+acceleration), the mean depth-averaged velocity over 6 s behind the bore, and the profile
+normalised by it.
+"""
+import json
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from . import metrics as M
+from . import reference as R
+from .bag import read
+
+LABELS = {
+    "peak_velocity": ("peak x-velocity at the probe", "m/s"),
+    "velocity_rms": ("RMS error of the probe velocity", "m/s"),
+    "peak_force_at_wall": ("peak x-force, pressure blocks at the faces", "N"),
+    "peak_force_0p06m": ("peak x-force, pressure blocks 0.06 m out", "N"),
+    "force_rms_0p06m": ("RMS error of the force (blocks 0.06 m out)", "N"),
+    "peak_force_body": ("peak x-force on the obstruction's particles", "N"),
+    "D_max_velocity": ("max forward velocity at D", "m/s"),
+    "D_return_time": ("time from max forward to max return flow at D", "s"),
+    "bore_arrival": ("bore arrival (greatest acceleration)", "s"),
+    "mean_velocity": ("mean depth-averaged velocity, 6 s behind the bore", "m/s"),
+}
+
+
+def _metric(key, value, experiment=None, gpusph=None, note=""):
+    label, unit = LABELS[key] if key in LABELS else (key, "")
+    row = {"key": key, "label": label, "unit": unit, "value": value, "experiment": experiment, "gpusph": gpusph,
+           "note": note}
+    if experiment is not None and value is not None and key.startswith(("peak", "mean", "profile")):
+        row["error_pct"] = M.percent_error(value, experiment)
+        if gpusph is not None:
+            row["gpusph_error_pct"] = M.percent_error(gpusph, experiment)
+    return row
+
+
+def _x(series, component="v"):
+    return series["t"], series[component][:, 0]
+
+
+def dambreak1(rec, meta, shared, scenario, dx, same_case):
+    out, curves = [], {}
+    gp = (lambda table, column: R.gpusph_value(shared, table, column, scenario, dx)) if same_case else (lambda *a: None)
+    t, u = M.moving_average(*_x(rec.topic("probes/velocity")))
+    exp_v = R.experiment_series(shared, "velocity")
+    t_ref = M.peak(*M.moving_average(*exp_v))[0] if exp_v else 0.0
+    t_al = M.align_to(t, u, t_ref)
+    out.append(_metric("peak_velocity", M.peak(t, u)[1], R.experiment_value(shared, "dambreak1", "peak_velocity_at_probe"),
+                       gp("dambreak1_peak_velocity.csv", "peak_velocity_m_s")))
+    if exp_v:
+        first = exp_v[0] < 0.7  # the thesis used the first group of points only (4.2.1)
+        out.append(_metric("velocity_rms", M.rms_error(t_al, u, exp_v[0][first], exp_v[1][first]), None,
+                           gp("dambreak1_velocity_rms.csv", "rms_error_m_s"),
+                           note="experimental scatter 0.39 m/s"))
+    curves["velocity"] = (t_al, u, exp_v)
+    exp_f = R.experiment_series(shared, "force")
+    f_ref = M.peak(*M.moving_average(*exp_f))[0] if exp_f else 0.0
+    f_exp_peak = R.experiment_value(shared, "dambreak1", "peak_force_on_obstruction")
+    body = next(iter(meta.get("bodies") or {"obstruction": 0}))
+    forces = {}
+    for offset, key, table in ((0.0, "peak_force_at_wall", "dambreak1_peak_force_at_wall.csv"),
+                               (0.06, "peak_force_0p06m", "dambreak1_peak_force_0p06m.csv")):
+        tf, f = M.moving_average(*_x(rec.topic(f"bodies/{body}/pressure_blocks/d{int(round(offset * 1000)):03d}mm"),
+                                     "force"))
+        forces[key] = (M.align_to(tf, f, f_ref), f)
+        out.append(_metric(key, M.peak(tf, f)[1], f_exp_peak, gp(table, "peak_force_N")))
+    if exp_f:
+        tf, f = forces["peak_force_0p06m"]
+        out.append(_metric("force_rms_0p06m", M.rms_error(tf, f, *exp_f), None,
+                           gp("dambreak1_force_rms_0p06m.csv", "rms_error_N"), note="experimental scatter 1.50 N"))
+    tb, fb = M.moving_average(*_x(rec.topic(f"bodies/{body}/wrench"), "force"))
+    forces["peak_force_body"] = (M.align_to(tb, fb, f_ref), fb)
+    out.append(_metric("peak_force_body", M.peak(tb, fb)[1], f_exp_peak, note="no GPUSPH counterpart in the thesis"))
+    curves["force"] = (forces, exp_f)
+    td, ud = M.moving_average(*_x(rec.topic("probes/D")))
+    fr = M.forward_return(td, ud)
+    out.append(_metric("D_max_velocity", fr["max_forward"], None, gp("dambreak1_location_D_max_velocity.csv",
+                                                                      "max_velocity_m_s")))
+    out.append(_metric("D_return_time", fr["time_difference"], None, gp("dambreak1_location_D_return_time.csv",
+                                                                         "time_difference_s")))
+    curves["D"] = (td, ud, fr)
+    return out, curves
+
+
+def dambreak2(rec, meta, shared, scenario, dx, upper):
+    out, curves = [], {}
+    t, u = _x(rec.topic("probes/bore"))
+    arrival = M.bore_arrival(t, u)
+    mean, covered = M.mean_behind(t, u, arrival)
+    case = f"dambreak2_{int(round(upper * 100)):03d}"
+    table = f"{case}_mean_velocity.csv"
+    out.append(_metric("bore_arrival", arrival, None, R.gpusph_value(shared, f"{case}_bore_arrival.csv",
+                                                                     "arrival_time_s", scenario, dx, upper)))
+    note = "" if covered >= M.BORE_WINDOW - 0.15 else f"the record covers only {covered:.1f} s behind the bore"
+    out.append(_metric("mean_velocity", mean, R.experiment_value(shared, case, "mean_bore_velocity_6s_window"),
+                       R.gpusph_value(shared, table, "mean_velocity_m_s", scenario, dx, upper), note=note))
+    profile = []
+    k = 0
+    while True:
+        try:
+            tp, up = _x(rec.topic(f"probes/profile/h{k}"))
+        except KeyError:
+            break
+        profile.append(M.mean_behind(tp, up, arrival)[0] / mean if mean else float("nan"))
+        k += 1
+    exp_p = R.experiment_profile(shared) if case == "dambreak2_015" else None
+    gp_p = R.gpusph_profile(shared, scenario, dx) if case == "dambreak2_015" else None
+    for j, value in enumerate(profile):
+        key = f"profile_{'ABCDEF'[j] if j < 6 else j}"
+        e = float(exp_p[1][j]) if exp_p is not None and j < len(exp_p[1]) else None
+        g = float(gp_p[1][j]) if gp_p is not None and j < len(gp_p[1]) else None
+        row = _metric(key, value, e, g)
+        row["label"], row["unit"] = f"normalised velocity at point {key[-1]}", "-"
+        out.append(row)
+    curves["bore"] = (t, u, arrival, mean)
+    curves["profile"] = (profile, exp_p, gp_p)
+    return out, curves
+
+
+def analyse(path, shared=None) -> dict:
+    """Metrics of the recording at ``path`` (a bag directory) as a JSON-ready dict, plus curves."""
+    rec = read(path)
+    meta = rec.metadata
+    shared = shared or R.shared_dir()
+    scene = yaml.safe_load(meta.get("scene", "")) or {}
+    name = meta.get("scene_name", scene.get("name", "?"))
+    run = meta.get("run_config") or {}
+    dx = float(meta.get("dx", run.get("dx", 0.0)))
+    scenario, exact = R.thesis_scenario(meta.get("kernel", ""), meta.get("viscosity", ""))
+    report = {"recording": str(path), "scene": name, "dx": dx, "kernel": meta.get("kernel"),
+              "viscosity": meta.get("viscosity"), "boundary": meta.get("boundary"), "precision": meta.get("precision"),
+              "device": meta.get("device"), "particles": int(meta.get("particles", 0)),
+              "fluid_particles": int(meta.get("fluid_particles", 0)), "result": rec.result,
+              "complete": rec.complete, "shared": str(shared) if shared else None,
+              "gpusph_scenario": scenario, "gpusph_scenario_exact": exact}
+    if name.startswith("dambreak1"):
+        rows, curves = dambreak1(rec, meta, shared, scenario, dx, same_case=(name == "dambreak1_thesis"))
+        report["gpusph_case"] = "DamBreak 1, 0.4 m column" if name == "dambreak1_thesis" else None
+    elif name.startswith("dambreak2"):
+        rows, curves = dambreak2(rec, meta, shared, scenario, dx, float(scene.get("depth", 0.1)))
+        report["gpusph_case"] = f"DamBreak 2, {scene.get('depth')} m"
+    else:
+        rows, curves = [], {}
+    report["metrics"] = rows
+    return report, curves
+
+
+def _fmt(value, err=None):
+    if value is None or (isinstance(value, float) and not np.isfinite(value)):
+        return "-"
+    text = f"{value:.3g}" if abs(value) < 100 else f"{value:.1f}"
+    return text + (f" ({err:+.1f}%)" if err is not None else "")
+
+
+def table(report) -> str:
+    """The thesis-style table: experiment, GPUSPH (thesis), this run."""
+    res = report.get("result") or {}
+    scen = report.get("gpusph_scenario")
+    if report.get("gpusph_case") and scen:
+        gp = (f"GPUSPH: thesis scenario {scen} ({R.SCENARIOS[scen]}), {report['gpusph_case']}, dx = {report['dx']:g} m"
+              + ("" if report.get("gpusph_scenario_exact") else " [same kernel; our turbulence/viscosity model differs]"))
+    else:
+        gp = "GPUSPH: the thesis has no run of this scene with these numerics"
+    head = [f"{report['scene']}: dx = {report['dx']:g} m, {report['kernel']} kernel, {report['viscosity']} viscosity, "
+            f"{report['boundary']} boundaries, {report['precision']} on {report['device']}",
+            f"{report['particles']:,} particles ({report['fluid_particles']:,} fluid); status {res.get('status', 'unknown (no result record: killed?)')}, "
+            f"wall {res.get('wall_time_s', '?')} s, {res.get('steps', '?')} steps, {res.get('mipps', '?')} MIPPS",
+            gp, ""]
+    rows = [("metric", "unit", "experiment", "GPUSPH (thesis)", "this run")]
+    for m in report["metrics"]:
+        rows.append((m["label"], m["unit"], _fmt(m["experiment"]), _fmt(m["gpusph"], m.get("gpusph_error_pct")),
+                     _fmt(m["value"], m.get("error_pct")) + (f"  [{m['note']}]" if m["note"] else "")))
+    widths = [max(len(r[k]) for r in rows) for k in range(4)]
+    lines = ["  ".join(r[k].ljust(widths[k]) for k in range(4)) + "  " + r[4] for r in rows]
+    return "\n".join(head + lines)
+
+
+def charts(report, curves, out_dir) -> list:
+    """PNG charts: the time series with the experimental points, and our errors beside GPUSPH's."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    title = f"{report['scene']}, dx = {report['dx']:g} m, {report['kernel']}, {report['viscosity']}"
+    written = []
+
+    def save(fig, name):
+        fig.tight_layout()
+        fig.savefig(out_dir / name, dpi=110)
+        plt.close(fig)
+        written.append(str(out_dir / name))
+
+    if "velocity" in curves:
+        t, u, exp = curves["velocity"]
+        fig, ax = plt.subplots(figsize=(7, 4))
+        ax.plot(t, u, label="this run (0.04 s average, peak aligned)")
+        if exp:
+            ax.plot(*exp, "k.", ms=3, label="Yeh & Petroff (digitised)")
+        ax.set(xlabel="time, peak aligned [s]", ylabel="x-velocity [m/s]", title=f"Probe velocity: {title}")
+        ax.legend()
+        save(fig, "velocity.png")
+        forces, exp = curves["force"]
+        fig, ax = plt.subplots(figsize=(7, 4))
+        for key, (tf, f) in forces.items():
+            ax.plot(tf, f, label=LABELS[key][0].replace("peak x-force, ", "").replace("peak ", ""))
+        if exp:
+            ax.plot(*exp, "k.", ms=3, label="Yeh & Petroff (digitised)")
+        ax.set(xlabel="time, peak aligned [s]", ylabel="x-force [N]", title=f"Force on the obstruction: {title}")
+        ax.legend(fontsize=8)
+        save(fig, "force.png")
+        td, ud, fr = curves["D"]
+        fig, ax = plt.subplots(figsize=(7, 4))
+        ax.plot(td, ud, label="this run (0.04 s average)")
+        ax.plot([fr["t_forward"], fr["t_return"]], [fr["max_forward"], fr["max_return"]], "ro", label="max forward / return")
+        ax.set(xlabel="time [s]", ylabel="x-velocity [m/s]", title=f"Point D: {title}")
+        ax.legend()
+        save(fig, "point_D.png")
+    if "bore" in curves:
+        t, u, arrival, mean = curves["bore"]
+        fig, ax = plt.subplots(figsize=(7, 4))
+        ax.plot(t, u, label="depth-averaged x-velocity")
+        ax.axvline(arrival, color="r", ls="--", label=f"bore arrival {arrival:.1f} s")
+        ax.hlines(mean, arrival, arrival + M.BORE_WINDOW, colors="g", label=f"6 s mean {mean:.3f} m/s")
+        ax.set(xlabel="time [s]", ylabel="velocity [m/s]", title=f"Bore at x = 11.1 m: {title}")
+        ax.legend()
+        save(fig, "bore_velocity.png")
+        profile, exp_p, gp_p = curves["profile"]
+        if profile:
+            fig, ax = plt.subplots(figsize=(5, 4))
+            heights = exp_p[0] if exp_p is not None else np.arange(len(profile))
+            ax.plot(profile, heights[:len(profile)], "o-", label="this run")
+            if exp_p is not None:
+                ax.plot(exp_p[1], exp_p[0], "ks", label="Arnason et al. (thesis Table 33)")
+            if gp_p is not None:
+                ax.plot(gp_p[1], gp_p[0], "^--", label="GPUSPH (thesis)")
+            ax.set(xlabel="u / depth-averaged u [-]", ylabel="height [m]", title="Velocity profile")
+            ax.legend(fontsize=8)
+            save(fig, "profile.png")
+    compared = [m for m in report["metrics"] if m.get("error_pct") is not None]
+    if compared:
+        fig, ax = plt.subplots(figsize=(7, 4))
+        x = np.arange(len(compared))
+        ax.bar(x - 0.2, [m["error_pct"] for m in compared], 0.4, label="this run")
+        ax.bar(x + 0.2, [m.get("gpusph_error_pct") or 0.0 for m in compared], 0.4, label="GPUSPH (thesis, same dx)")
+        ax.axhline(0.0, color="k", lw=0.8)
+        ax.set_xticks(x, [m["key"] for m in compared], rotation=20, fontsize=8)
+        ax.set(ylabel="error against experiment [%] (Eq. 4.1)", title=f"Errors: {title}")
+        ax.legend()
+        save(fig, "errors.png")
+    return written
+
+
+def write(report, out_dir) -> Path:
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    path = out_dir / "metrics.json"
+    path.write_text(json.dumps(report, indent=2, default=float))
+    return path

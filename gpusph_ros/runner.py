@@ -1,0 +1,116 @@
+"""A run of a scene, headless: build, step to each output time, measure, and hand the
+messages of each output step to a recorder (and, in the node, to publishers).
+
+Outputs fall at k / output_rate for k = 0, 1, ... up to the end time; each carries /clock
+first, then the measurements of the scene's probes and bodies, and every ``particle_every``-th
+output the particle cloud.
+"""
+import datetime
+import platform
+import time
+from importlib.metadata import version
+
+import numpy as np
+import yaml
+
+from .measure.suite import Measurements
+from .ros import messages
+from .ros.recording import BagRecorder, qos_yaml
+from .scenes.build import build
+from .sph import HealthError, Solver
+
+NAMESPACE = "/sim_node"
+
+
+class Run:
+    """One run of ``scene`` under ``run_config`` (``scenes.run.resolve``)."""
+
+    def __init__(self, scene, run_config, namespace: str = NAMESPACE, frame_id: str = "world"):
+        self.scene, self.run_config = scene, run_config
+        self.output = run_config.output
+        self.namespace, self.frame_id = namespace, frame_id
+        self.model = build(scene, **run_config.numerics)
+        self.solver = Solver(self.model.config, self.model.particles)
+        self.measurements = Measurements(self.solver, self.model)
+        self.cloud = messages.CloudBuilder(self.solver.n, frame_id=frame_id)
+        self.n_outputs = int(np.floor(self.output.end_time * self.output.output_rate + 1e-9)) + 1
+        self.next_output = 0
+        self.wall = 0.0
+
+    @property
+    def particles_topic(self) -> str:
+        return f"{self.namespace}/particles"
+
+    def describe(self) -> dict:
+        """What a recording's metadata says about this run."""
+        cfg, solver = self.model.config, self.solver
+        fluid = int((self.model.particles.ptype == 0).sum())
+        return {
+            "scene_name": self.scene.name, "scene": self.scene.text,
+            "run_config": yaml.safe_dump(self.run_config.as_dict(), sort_keys=True),
+            "dx": cfg.dx, "kernel": cfg.kernel, "viscosity": cfg.viscosity, "boundary": cfg.boundary,
+            "precision": cfg.precision, "device": str(solver.device), "particles": solver.n,
+            "fluid_particles": fluid, "particles_order": "fluid first, then boundary",
+            "bodies": yaml.safe_dump(self.model.bodies), "namespace": self.namespace, "frame_id": self.frame_id,
+            "versions": yaml.safe_dump({"gpusph_ros": version("gpusph_ros"), "warp": version("warp-lang"),
+                                        "numpy": np.__version__, "python": platform.python_version()}),
+            "host": platform.node(), "started_utc": datetime.datetime.now(datetime.timezone.utc).isoformat(),
+        }
+
+    def open_recording(self, path) -> BagRecorder:
+        recorder = BagRecorder(path, self.describe())
+        recorder.add_topic("/clock", "rosgraph_msgs/msg/Clock", qos_yaml(reliable=False, depth=1))
+        if self.output.particle_every:
+            recorder.add_topic(self.particles_topic, "sensor_msgs/msg/PointCloud2", qos_yaml(depth=1))
+        return recorder
+
+    def output_messages(self, index: int) -> list:
+        """(topic, message) pairs of output ``index`` at the solver's current time."""
+        t = self.solver.time
+        out = [("/clock", messages.clock(t))]
+        out += messages.measurement_messages(t, self.measurements.sample(), self.scene, self.namespace, self.frame_id)
+        every = self.output.particle_every
+        if every and index % every == 0:
+            out.append((self.particles_topic, self.cloud.build(t, self.solver.snapshot())))
+        return out
+
+    def step_output(self) -> list:
+        """Advance to the next output time and return its messages (HealthError on failure)."""
+        k = self.next_output
+        start = time.perf_counter()
+        self.solver.advance(k / self.output.output_rate)
+        msgs = self.output_messages(k)
+        self.wall += time.perf_counter() - start
+        self.next_output += 1
+        return msgs
+
+    @property
+    def done(self) -> bool:
+        return self.next_output >= self.n_outputs
+
+    def mipps(self) -> float:
+        return self.solver.n * self.solver.steps / max(self.wall, 1e-9) / 1e6
+
+    def execute(self, recorder=None, progress=None) -> dict:
+        """Run to the end time, recording each output; returns the result record (status,
+        wall time, steps, MIPPS). A HealthError ends the run with status 'failed'; an interrupt
+        (Ctrl-C, SIGTERM turned into KeyboardInterrupt) with 'interrupted'. The recording is
+        closed either way."""
+        status = "completed"
+        try:
+            while not self.done:
+                for topic, msg in self.step_output():
+                    if recorder is not None:
+                        recorder.write(topic, msg, self.solver.time)
+                if progress is not None:
+                    progress(self)
+        except HealthError as err:
+            status = f"failed: {err}"
+        except KeyboardInterrupt:
+            status = "interrupted"
+        result = {"status": status, "wall_time_s": round(self.wall, 3), "steps": self.solver.steps,
+                  "simulated_time_s": self.solver.time, "mipps": round(self.mipps(), 4),
+                  "outputs": self.next_output}
+        if recorder is not None:
+            recorder.close(result)
+        return result

@@ -1,0 +1,54 @@
+"""The thesis's metrics (Section 4) on series with known answers."""
+import numpy as np
+import pytest
+
+from gpusph_ros.analysis import metrics as M
+from gpusph_ros.analysis.reference import gpusph_value, thesis_scenario
+
+
+def test_moving_average_keeps_lines_and_averages_a_window():
+    t = np.arange(0.0, 1.0, 0.01)
+    _, y = M.moving_average(t, 2.0 * t + 1.0)
+    assert np.allclose(y[5:-5], 2.0 * t[5:-5] + 1.0)  # a line is unchanged away from the ends
+    _, y = M.moving_average(t, (np.arange(len(t)) % 2).astype(float))
+    assert np.allclose(y[5:-5], [0.4, 0.6] * 45)  # 5 samples per 0.04 s window: 2 or 3 of them ones
+
+
+def test_percent_error_is_eq_4_1():
+    assert M.percent_error(2.23, 2.21) == pytest.approx(0.905, abs=1e-3)
+    assert M.percent_error(0.63, 2.21) == pytest.approx(-71.49, abs=1e-2)
+
+
+def test_alignment_moves_the_peak_and_rms_of_a_match_is_zero():
+    t = np.linspace(0.0, 1.0, 501)
+    y = np.exp(-((t - 0.3) / 0.05) ** 2)
+    shifted = M.align_to(t, y, 0.1)
+    assert M.peak(shifted, y)[0] == pytest.approx(0.1)
+    t_exp = np.linspace(0.0, 0.5, 30)
+    assert M.rms_error(shifted, y, t_exp, np.exp(-((t_exp - 0.1) / 0.05) ** 2)) < 1e-4
+    assert M.rms_error(shifted, y, t_exp, np.exp(-((t_exp - 0.1) / 0.05) ** 2) + 0.2) == pytest.approx(0.2, abs=1e-4)
+
+
+def test_forward_return_and_bore_arrival():
+    t = np.linspace(0.0, 3.0, 3001)
+    u = np.sin(2 * np.pi * t / 2.0)  # max at 0.5 s, min at 1.5 s
+    fr = M.forward_return(t, u)
+    assert fr["max_forward"] == pytest.approx(1.0) and fr["max_return"] == pytest.approx(-1.0)
+    assert fr["time_difference"] == pytest.approx(1.0, abs=1e-3)
+    t = np.arange(0.0, 14.0, 0.1)
+    u = 0.55 * (1 + np.tanh((t - 5.05) / 0.1)) / 2  # a bore at 5.05 s, then 0.55 m/s
+    arrival = M.bore_arrival(t, u)
+    assert arrival == pytest.approx(5.1, abs=1e-9)  # 10 Hz, as the thesis's output
+    mean, covered = M.mean_behind(t, u, arrival)
+    assert mean == pytest.approx(0.55, rel=0.01) and covered == pytest.approx(6.0, abs=0.05)
+
+
+def test_gpusph_lookup_by_scenario_and_dx(shared_dir):
+    assert thesis_scenario("quadratic", "sps") == (1, True)
+    assert thesis_scenario("quadratic", "laminar") == (2, True)
+    assert thesis_scenario("cubic_spline", "artificial") == (3, False)
+    assert thesis_scenario("wendland", "sps") == (None, False)
+    # thesis Table 8, scenario 3 at 2.0e-2 m: 0.63 m/s; Table 25, 0.10 m case, scenario 1 at 1.0e-2 m: 0.52 m/s
+    assert gpusph_value(shared_dir, "dambreak1_peak_velocity.csv", "peak_velocity_m_s", 3, 0.02) == 0.63
+    assert gpusph_value(shared_dir, "dambreak2_010_mean_velocity.csv", "mean_velocity_m_s", 1, 0.01, 0.1) == 0.52
+    assert gpusph_value(shared_dir, "dambreak1_peak_velocity.csv", "peak_velocity_m_s", 3, 0.025) is None

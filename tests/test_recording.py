@@ -1,0 +1,141 @@
+"""Recordings: the bag a run writes opens with rosbags and with mcap_ros2 (no project code),
+carries ros2msg schemas whose RIHS01 hashes match the installed packages', decodes to the
+solver's own arrays, and survives a kill up to its last complete chunk; SIGTERM closes it whole."""
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mcap.stream_reader import StreamReader
+from mcap_ros2.reader import read_ros2_messages
+from rosbags.highlevel import AnyReader
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+from gpusph_ros.analysis.bag import read
+from gpusph_ros.ros import msgdefs
+from gpusph_ros.runner import Run
+from gpusph_ros.scenes.run import resolve
+from gpusph_ros.scenes.schema import load_scene
+
+REPO = Path(__file__).resolve().parents[1]
+TYPES = ["sensor_msgs/msg/PointCloud2", "geometry_msgs/msg/WrenchStamped", "geometry_msgs/msg/Vector3Stamped",
+         "geometry_msgs/msg/PointStamped", "sensor_msgs/msg/FluidPressure", "rosgraph_msgs/msg/Clock"]
+
+
+@pytest.mark.parametrize("type_name", TYPES)
+def test_schema_text_hashes_to_the_installed_type_hash(type_name):
+    """rosbags rebuilds the type from our concatenated text alone and gets rosidl's RIHS01 hash."""
+    text = msgdefs.full_text(type_name)
+    store = get_typestore(Stores.EMPTY)
+    store.register(get_types_from_msg(text, type_name))
+    assert store.hash_rihs01(type_name) == msgdefs.type_hash(type_name)
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory):
+    """DamBreak 1 at a coarse spacing for 0.03 s, every output with a particle cloud."""
+    scene = load_scene("dambreak1_thesis")
+    run = Run(scene, resolve(scene, sets=["dx=0.06", "end_time=0.03", "particle_rate=100"]))
+    path = tmp_path_factory.mktemp("bags") / "db1"
+    result = run.execute(run.open_recording(path))
+    return run, path, result
+
+
+def test_rosbags_reads_every_topic_and_the_cloud_is_the_solver_state(recorded):
+    run, path, result = recorded
+    assert result["status"] == "completed" and result["outputs"] == 4
+    snap = run.solver.snapshot()
+    with AnyReader([path]) as reader:
+        topics = {c.topic: c.msgtype for c in reader.connections}
+        counts = {c.topic: c.msgcount for c in reader.connections}
+        clouds = [reader.deserialize(raw, c.msgtype) for c, _, raw in reader.messages()
+                  if c.msgtype == "sensor_msgs/msg/PointCloud2"]
+        stamps = [t for _, t, _ in reader.messages()]
+    assert topics["/clock"] == "rosgraph_msgs/msg/Clock"
+    assert topics["/sim_node/particles"] == "sensor_msgs/msg/PointCloud2"
+    assert topics["/sim_node/bodies/obstruction/wrench"] == "geometry_msgs/msg/WrenchStamped"
+    assert topics["/sim_node/bodies/obstruction/pressure_blocks/d060mm"] == "geometry_msgs/msg/WrenchStamped"
+    assert topics["/sim_node/probes/velocity"] == "geometry_msgs/msg/Vector3Stamped"
+    assert topics["/sim_node/probes/D/pressure"] == "sensor_msgs/msg/FluidPressure"
+    assert set(counts.values()) == {4}
+    assert max(stamps) == 30_000_000  # simulated time, ns
+    last = clouds[-1]
+    assert [f.name for f in last.fields] == ["x", "y", "z", "vx", "vy", "vz", "density", "pressure"]
+    assert last.width == run.solver.n and last.point_step == 32
+    values = np.frombuffer(last.data.tobytes(), dtype="<f4").reshape(last.width, 8)
+    assert np.array_equal(values[:, 0:3], snap["pos"].astype(np.float32))
+    assert np.array_equal(values[:, 3:6], snap["vel"].astype(np.float32))
+    assert np.array_equal(values[:, 6], snap["rho"].astype(np.float32))
+    assert np.array_equal(values[:, 7], snap["pressure"].astype(np.float32))
+
+
+def test_mcap_ros2_reader_decodes_the_file_and_metadata_describes_the_run(recorded):
+    run, path, _ = recorded
+    msgs = list(read_ros2_messages(str(next(path.glob("*.mcap")))))
+    per_topic = {}
+    for m in msgs:
+        per_topic[m.channel.topic] = per_topic.get(m.channel.topic, 0) + 1
+    assert len(per_topic) == 9 and set(per_topic.values()) == {4}
+    wrench = [m.ros_msg for m in msgs if m.channel.topic.endswith("obstruction/wrench")][-1]
+    force, _ = run.measurements.sample()["wrenches"]["obstruction"]
+    assert wrench.wrench.force.x == pytest.approx(force[0], rel=1e-6, abs=1e-9)
+    rec = read(path)
+    assert rec.complete and rec.result["status"] == "completed"
+    assert rec.metadata["scene_name"] == "dambreak1_thesis" and rec.metadata["run_config"]["dx"] == 0.06
+    assert "warp" in rec.metadata["versions"] and rec.metadata["device"] == "cpu"
+    assert "Yeh & Petroff" in rec.metadata["scene"]
+
+
+def _start(out, *extra):
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    return subprocess.Popen([sys.executable, "-m", "gpusph_ros.cli", "run", "collapse_2d", "--set", "dx=0.003",
+                             "--set", "end_time=5", "--set", "particle_rate=100", "--quiet", "--out", str(out), *extra],
+                            cwd=REPO, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+
+
+def _wait_for_size(proc, path, size, timeout=120):
+    start = time.time()
+    while time.time() - start < timeout:
+        files = list(path.glob("*.mcap"))
+        if files and files[0].stat().st_size > size:
+            return
+        assert proc.poll() is None, proc.stdout.read()
+        time.sleep(0.2)
+    pytest.fail("the run wrote too little in time")
+
+
+def test_killed_run_leaves_its_complete_chunks_readable(tmp_path):
+    out = tmp_path / "killed"
+    proc = _start(out)
+    _wait_for_size(proc, out, 3 << 20)  # three 1 MiB chunks
+    proc.kill()
+    proc.wait()
+    # a plain streaming MCAP reader, no project code: messages up to the cut
+    count = 0
+    with open(next(out.glob("*.mcap")), "rb") as f:
+        try:
+            for record in StreamReader(f).records:
+                count += type(record).__name__ == "Message"
+        except Exception:  # the cut-off record at the end
+            pass
+    assert count > 30
+    rec = read(out)
+    assert not rec.complete and rec.result == {}
+    assert sum(len(s["t"]) for s in rec.series.values()) + len(rec.clouds) + len(rec.clock) == count
+    assert (out / "metadata.yaml").is_file()
+
+
+def test_sigterm_finishes_the_file(tmp_path):
+    out = tmp_path / "stopped"
+    proc = _start(out)
+    _wait_for_size(proc, out, 1 << 20)
+    proc.send_signal(signal.SIGTERM)
+    assert proc.wait(timeout=60) == 2
+    with AnyReader([out]) as reader:
+        assert reader.message_count > 0
+    rec = read(out)
+    assert rec.complete and rec.result["status"] == "interrupted"
