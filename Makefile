@@ -14,8 +14,12 @@ $(STAMP): requirements.txt setup.py package.xml
 	$(BIN)/python -m pip install --quiet --no-deps -e .
 	touch $(STAMP)
 
+# the main job, coarse enough for a 2-core CPU: DamBreak 1 at dx = 3 cm for 1 s, recorded and analysed
+RUN_DIR ?= runs/make-run
 run: $(STAMP)
-	$(BIN)/python -m gpusph_ros.cli run dambreak3d --dx 0.02 --end-time 0.8
+	rm -rf $(RUN_DIR)
+	$(BIN)/gpusph-run dambreak1_thesis --set dx=0.03 --set end_time=1.0 --out $(RUN_DIR)
+	$(BIN)/gpusph-analyze $(RUN_DIR)
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q tests

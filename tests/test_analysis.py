@@ -11,7 +11,7 @@ def test_moving_average_keeps_lines_and_averages_a_window():
     _, y = M.moving_average(t, 2.0 * t + 1.0)
     assert np.allclose(y[5:-5], 2.0 * t[5:-5] + 1.0)  # a line is unchanged away from the ends
     _, y = M.moving_average(t, (np.arange(len(t)) % 2).astype(float))
-    assert np.allclose(y[5:-5], [0.4, 0.6] * 45)  # 5 samples per 0.04 s window: 2 or 3 of them ones
+    assert np.allclose(y[5:-5], [0.6, 0.4] * 45)  # 5 samples per 0.04 s window: 2 or 3 of them ones
 
 
 def test_percent_error_is_eq_4_1():

@@ -10,13 +10,10 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from pathlib import Path
-
 import yaml
 
-from ..share import config_dir
 from ..sph.config import ConfigError, SolverConfig
-from .schema import Scene
+from .schema import Scene, read_yaml, shipped
 
 # SolverConfig fields that the scene decides, or that the scene builder derives
 SCENE_FIELDS = ("dim", "gravity", "depth", "domain_lo", "domain_hi", "periodic", "planes")
@@ -54,21 +51,13 @@ class RunConfig:
 
 
 def run_config_names() -> list:
-    return sorted(p.stem for p in config_dir("runs").glob("*.yaml"))
+    return shipped("runs")
 
 
 def read_run_file(name_or_path) -> dict:
     """A run configuration file: a path, or a name from config/runs."""
-    path = Path(name_or_path)
-    if not path.suffix and (config_dir("runs") / f"{name_or_path}.yaml").is_file():
-        path = config_dir("runs") / f"{name_or_path}.yaml"
-    if not path.is_file():
-        raise ConfigError("run_config", str(name_or_path),
-                          "a run configuration (" + ", ".join(run_config_names()) + ") or a path to a YAML file")
-    try:
-        data = yaml.safe_load(path.read_text()) or {}
-    except yaml.YAMLError as err:
-        raise ConfigError("run_config", str(path), f"valid YAML ({err})") from None
+    path, _, data = read_yaml("runs", name_or_path, "run_config", "run configuration")
+    data = {} if data is None else data
     if not isinstance(data, dict):
         raise ConfigError("run_config", str(path), "a YAML mapping of run settings")
     return data

@@ -78,24 +78,35 @@ class Scene:
     text: str = ""  # the file as written, recorded with each run
 
 
+def shipped(sub: str) -> list:
+    """Names of the YAML files shipped in config/<sub>."""
+    return sorted(p.stem for p in config_dir(sub).glob("*.yaml"))
+
+
 def builtin_names() -> list:
     """The scenes shipped in config/scenes."""
-    return sorted(p.stem for p in config_dir("scenes").glob("*.yaml"))
+    return shipped("scenes")
+
+
+def read_yaml(sub: str, name_or_path, field_name: str, what: str):
+    """(path, text, data) of a YAML file given by path or by the name of one shipped in
+    config/<sub>; ConfigError on ``field_name`` when it is missing or not YAML."""
+    path = Path(name_or_path)
+    if not path.suffix and (config_dir(sub) / f"{name_or_path}.yaml").is_file():
+        path = config_dir(sub) / f"{name_or_path}.yaml"
+    if not path.is_file():
+        raise ConfigError(field_name, str(name_or_path),
+                          f"a built-in {what} (" + ", ".join(shipped(sub)) + f") or a path to a YAML {what} file")
+    text = path.read_text()
+    try:
+        return path, text, yaml.safe_load(text)
+    except yaml.YAMLError as err:
+        raise ConfigError(field_name, str(path), f"valid YAML ({err})") from None
 
 
 def load_scene(name_or_path) -> Scene:
     """A scene from a built-in name (``builtin_names()``) or a YAML file path."""
-    path = Path(name_or_path)
-    if not path.suffix and (config_dir("scenes") / f"{name_or_path}.yaml").is_file():
-        path = config_dir("scenes") / f"{name_or_path}.yaml"
-    if not path.is_file():
-        raise ConfigError("scene", str(name_or_path),
-                          "a built-in scene (" + ", ".join(builtin_names()) + ") or a path to a YAML scene file")
-    text = path.read_text()
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as err:
-        raise ConfigError("scene", str(path), f"valid YAML ({err})") from None
+    path, text, data = read_yaml("scenes", name_or_path, "scene", "scene")
     scene = parse_scene(data, default_name=path.stem)
     scene.text = text
     return scene
