@@ -17,7 +17,7 @@ from .measure.suite import Measurements
 from .ros import messages
 from .ros.recording import BagRecorder, qos_yaml
 from .scenes.build import build
-from .sph import HealthError, Solver
+from .sph import HealthError, NeighbourOverflow, Solver
 
 NAMESPACE = "/sim_node"
 
@@ -93,7 +93,8 @@ class Run:
 
     def execute(self, recorder=None, progress=None) -> dict:
         """Run to the end time, recording each output; returns the result record (status,
-        wall time, steps, MIPPS). A HealthError ends the run with status 'failed'; an interrupt
+        wall time, steps, MIPPS). A HealthError or a neighbour-list overflow ends the run with
+        status 'failed'; an interrupt
         (Ctrl-C, SIGTERM turned into KeyboardInterrupt) with 'interrupted'. The recording is
         closed either way."""
         status = "completed"
@@ -104,7 +105,7 @@ class Run:
                         recorder.write(topic, msg, self.solver.time)
                 if progress is not None:
                     progress(self)
-        except HealthError as err:
+        except (HealthError, NeighbourOverflow) as err:
             status = f"failed: {err}"
         except KeyboardInterrupt:
             status = "interrupted"

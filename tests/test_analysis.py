@@ -52,3 +52,38 @@ def test_gpusph_lookup_by_scenario_and_dx(shared_dir):
     assert gpusph_value(shared_dir, "dambreak1_peak_velocity.csv", "peak_velocity_m_s", 3, 0.02) == 0.63
     assert gpusph_value(shared_dir, "dambreak2_010_mean_velocity.csv", "mean_velocity_m_s", 1, 0.01, 0.1) == 0.52
     assert gpusph_value(shared_dir, "dambreak1_peak_velocity.csv", "peak_velocity_m_s", 3, 0.025) is None
+
+
+def test_dambreak2_report_from_a_recorded_synthetic_bore(tmp_path, shared_dir):
+    """A recording of the dambreak2_015 scene's topics carrying a known bore: arrival at the
+    steepest rise, the 6 s mean, the profile normalised by it, and GPUSPH's and the experiment's
+    values beside them (thesis Tables 29-36)."""
+    from gpusph_ros.analysis.report import analyse, table
+    from gpusph_ros.ros.messages import clock, measurement_messages
+    from gpusph_ros.ros.recording import BagRecorder
+    from gpusph_ros.scenes.schema import load_scene
+
+    scene = load_scene("dambreak2_015")
+    heights = scene.probes[1].heights
+    rec = BagRecorder(tmp_path / "bore", {"scene_name": scene.name, "scene": scene.text, "dx": 0.01,
+                                          "kernel": "quadratic", "viscosity": "sps", "run_config": "{dx: 0.01}"})
+    for t in np.arange(0.0, 12.05, 0.1):
+        u = 0.8 * (1 + np.tanh((t - 4.45) / 0.1)) / 2
+        sample = {"points": {}, "columns": {"bore": {"vel": (u, 0.0, 0.0), "count": 30}},
+                  "profiles": {"profile": {"heights": np.array(heights),
+                                           "vel": [(u * (0.9 + z), 0.0, 0.0) for z in heights]}},
+                  "gauges": {"surface": 0.05}, "wrenches": {}, "blocks": {}}
+        rec.write("/clock", clock(t), t)
+        for topic, msg in measurement_messages(t, sample, scene):
+            rec.write(topic, msg, t)
+    rec.close({"status": "completed"})
+    report, _ = analyse(tmp_path / "bore", shared_dir)
+    values = {m["key"]: m for m in report["metrics"]}
+    assert values["bore_arrival"]["value"] == pytest.approx(4.5)
+    assert values["bore_arrival"]["gpusph"] == 4.5  # Table 32, scenario 1, 1.0e-2 m
+    assert values["mean_velocity"]["value"] == pytest.approx(0.8, rel=0.01)
+    assert values["mean_velocity"]["experiment"] == 0.772 and values["mean_velocity"]["gpusph"] == 0.71
+    assert values["mean_velocity"]["error_pct"] == pytest.approx((0.8 / 0.772 - 1) * 100, abs=1.0)
+    assert values["profile_A"]["value"] == pytest.approx(0.9 + heights[0], rel=0.01)
+    assert values["profile_A"]["experiment"] == 0.94
+    assert "normalised velocity at point F" in table(report)
