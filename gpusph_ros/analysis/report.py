@@ -209,7 +209,7 @@ def charts(report, curves, out_dir) -> list:
         ax.plot(t, u, label="this run (0.04 s average, peak aligned)")
         if exp:
             ax.plot(*exp, "k.", ms=3, label="Yeh & Petroff (digitised)")
-        ax.set(xlabel="time, peak aligned [s]", ylabel="x-velocity [m/s]", title=f"Probe velocity: {title}")
+        ax.set(xlabel="time, peak aligned [s]", ylabel="x-velocity [m/s]", title=f"Probe velocity\n{title}")
         ax.legend()
         save(fig, "velocity.png")
         forces, exp = curves["force"]
@@ -218,14 +218,14 @@ def charts(report, curves, out_dir) -> list:
             ax.plot(tf, f, label=LABELS[key][0].replace("peak x-force, ", "").replace("peak ", ""))
         if exp:
             ax.plot(*exp, "k.", ms=3, label="Yeh & Petroff (digitised)")
-        ax.set(xlabel="time, peak aligned [s]", ylabel="x-force [N]", title=f"Force on the obstruction: {title}")
+        ax.set(xlabel="time, peak aligned [s]", ylabel="x-force [N]", title=f"Force on the obstruction\n{title}")
         ax.legend(fontsize=8)
         save(fig, "force.png")
         td, ud, fr = curves["D"]
         fig, ax = plt.subplots(figsize=(7, 4))
         ax.plot(td, ud, label="this run (0.04 s average)")
         ax.plot([fr["t_forward"], fr["t_return"]], [fr["max_forward"], fr["max_return"]], "ro", label="max forward / return")
-        ax.set(xlabel="time [s]", ylabel="x-velocity [m/s]", title=f"Point D: {title}")
+        ax.set(xlabel="time [s]", ylabel="x-velocity [m/s]", title=f"Point D\n{title}")
         ax.legend()
         save(fig, "point_D.png")
     if "bore" in curves:
@@ -234,7 +234,7 @@ def charts(report, curves, out_dir) -> list:
         ax.plot(t, u, label="depth-averaged x-velocity")
         ax.axvline(arrival, color="r", ls="--", label=f"bore arrival {arrival:.1f} s")
         ax.hlines(mean, arrival, arrival + M.BORE_WINDOW, colors="g", label=f"6 s mean {mean:.3f} m/s")
-        ax.set(xlabel="time [s]", ylabel="velocity [m/s]", title=f"Bore at x = 11.1 m: {title}")
+        ax.set(xlabel="time [s]", ylabel="velocity [m/s]", title=f"Bore at x = 11.1 m\n{title}")
         ax.legend()
         save(fig, "bore_velocity.png")
         profile, exp_p, gp_p = curves["profile"]
@@ -257,7 +257,7 @@ def charts(report, curves, out_dir) -> list:
         ax.bar(x + 0.2, [m.get("gpusph_error_pct") or 0.0 for m in compared], 0.4, label="GPUSPH (thesis, same dx)")
         ax.axhline(0.0, color="k", lw=0.8)
         ax.set_xticks(x, [m["key"] for m in compared], rotation=20, fontsize=8)
-        ax.set(ylabel="error against experiment [%] (Eq. 4.1)", title=f"Errors: {title}")
+        ax.set(ylabel="error against experiment [%] (Eq. 4.1)", title=f"Errors against experiment\n{title}")
         ax.legend()
         save(fig, "errors.png")
     return written
