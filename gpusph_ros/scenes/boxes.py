@@ -34,11 +34,18 @@ def fill_box(lo, hi, dx: float, dim: int):
     """Fluid filling the box [lo, hi] exactly: along each axis the spacing is the box length over
     the smallest whole number of cells no wider than dx, so the top layer lies half a spacing
     (at most dx/2) below the stated surface (the thesis, Section 4.3, lost up to 20% of bore
-    velocity to a lattice that put it elsewhere). Returns the points and the particle volume,
-    box volume / count."""
+    velocity to a lattice that put it elsewhere). A box thinner than dx on the vertical (last)
+    axis is one layer dx/2 above its bottom. Returns the points and the particle volume, box
+    volume / count."""
     counts = [max(1, int(np.ceil((hi[ax] - lo[ax]) / dx - 1e-9))) for ax in range(dim)]
     spacing = [(hi[ax] - lo[ax]) / counts[ax] for ax in range(dim)]
     axes = [lo[ax] + (np.arange(counts[ax]) + 0.5) * spacing[ax] for ax in range(dim)]
+    up = dim - 1
+    if hi[up] - lo[up] < dx:
+        # a layer thinner than one spacing (a wet bed) is one layer of particles dx/2 above its
+        # bottom, the distance every first layer keeps from a wall: nearer, a wall force that
+        # holds rest at dx (Lennard-Jones r0) would throw it off; its mass stays the layer's
+        axes[up] = np.array([lo[up] + 0.5 * dx])
     grids = np.meshgrid(*axes, indexing="ij")
     pts = np.zeros((grids[0].size, 3))
     for ax in range(dim):
