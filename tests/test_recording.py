@@ -139,3 +139,14 @@ def test_sigterm_finishes_the_file(tmp_path):
         assert reader.message_count > 0
     rec = read(out)
     assert rec.complete and rec.result["status"] == "interrupted"
+
+
+def test_a_failed_run_keeps_what_it_recorded_and_says_why(tmp_path):
+    scene = load_scene("collapse_2d")
+    run = Run(scene, resolve(scene, sets=["dx=0.0076", "end_time=0.1", "dt_fixed=0.01"]))  # 200x the stable step
+    result = run.execute(run.open_recording(tmp_path / "failed"))
+    assert result["status"].startswith("failed: health check")
+    with AnyReader([tmp_path / "failed"]) as reader:
+        assert reader.message_count > 0  # output 0, the initial state
+    rec = read(tmp_path / "failed")
+    assert rec.complete and rec.result["status"] == result["status"]

@@ -123,7 +123,8 @@ class BagRecorder:
             "message_count": self.count,
             "topics_with_message_count": [
                 {"topic_metadata": {"name": topic, "type": e["type"], "serialization_format": "cdr",
-                                    "offered_qos_profiles": e["qos"],
+                                    # version 9 keeps the profiles as YAML here, as a string in the MCAP channel
+                                    "offered_qos_profiles": yaml.safe_load(e["qos"]),
                                     "type_description_hash": msgdefs.type_hash(e["type"])},
                  "message_count": e["count"]}
                 for topic, e in self._topics.items()],
