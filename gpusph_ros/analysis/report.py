@@ -144,7 +144,8 @@ def analyse(path, shared=None) -> dict:
               "device": meta.get("device"), "particles": int(meta.get("particles", 0)),
               "fluid_particles": int(meta.get("fluid_particles", 0)), "result": rec.result,
               "complete": rec.complete, "shared": str(shared) if shared else None,
-              "gpusph_scenario": scenario, "gpusph_scenario_exact": exact}
+              "gpusph_scenario": scenario, "gpusph_scenario_exact": exact,
+              "covers_until": max(rec.clock) if rec.clock else 0.0}
     if name.startswith("dambreak1"):
         rows, curves = dambreak1(rec, meta, shared, scenario, dx, same_case=(name == "dambreak1_thesis"))
         report["gpusph_case"] = "DamBreak 1, 0.4 m column" if name == "dambreak1_thesis" else None
@@ -178,6 +179,9 @@ def table(report) -> str:
             f"{report['particles']:,} particles ({report['fluid_particles']:,} fluid); status {res.get('status', 'unknown (no result record: killed?)')}, "
             f"wall {res.get('wall_time_s', '?')} s, {res.get('steps', '?')} steps, {res.get('mipps', '?')} MIPPS",
             gp, ""]
+    if res.get("status") != "completed":
+        head.insert(2, f"WARNING: the run did not complete; these metrics cover t <= {report.get('covers_until', 0):.3g} s only "
+                       "and are not comparable with a finished run")
     rows = [("metric", "unit", "experiment", "GPUSPH (thesis)", "this run")]
     for m in report["metrics"]:
         rows.append((m["label"], m["unit"], _fmt(m["experiment"]), _fmt(m["gpusph"], m.get("gpusph_error_pct")),
