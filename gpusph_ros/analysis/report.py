@@ -149,6 +149,8 @@ def analyse(path, shared=None) -> dict:
     if name.startswith("dambreak1"):
         rows, curves = dambreak1(rec, meta, shared, scenario, dx, same_case=(name == "dambreak1_thesis"))
         report["gpusph_case"] = "DamBreak 1, 0.4 m column" if name == "dambreak1_thesis" else None
+        # the thesis's probe is 0.146 m before the obstruction's face; PySPH reads it as before its centre
+        report["velocity_probe"] = (scene.get("probes") or {}).get("velocity", {}).get("position")
     elif name.startswith("dambreak2"):
         rows, curves = dambreak2(rec, meta, shared, scenario, dx, float(scene.get("depth", 0.1)))
         report["gpusph_case"] = f"DamBreak 2, {scene.get('depth')} m"
@@ -179,6 +181,8 @@ def table(report) -> str:
             f"{report['particles']:,} particles ({report['fluid_particles']:,} fluid); status {res.get('status', 'unknown (no result record: killed?)')}, "
             f"wall {res.get('wall_time_s', '?')} s, {res.get('steps', '?')} steps, {res.get('mipps', '?')} MIPPS",
             gp, ""]
+    if report.get("velocity_probe"):
+        head.insert(-1, f"velocity probe at {report['velocity_probe']} m")
     if res.get("status") != "completed":
         head.insert(2, f"WARNING: the run did not complete; these metrics cover t <= {report.get('covers_until', 0):.3g} s only "
                        "and are not comparable with a finished run")
