@@ -48,7 +48,7 @@ class CloudBuilder:
             key, column = _SOURCE[name]
             buf[:, k] = snapshot[key] if column is None else snapshot[key][:, column]
         data = array.array("B")
-        data.frombytes(buf.tobytes())
+        data.frombytes(buf.data.cast("B"))  # one copy, straight from the packed buffer
         n, step = buf.shape[0], buf.shape[1] * 4
         msg = PointCloud2(height=1, width=n, fields=self._layout, is_bigendian=False, point_step=step,
                           row_step=step * n, is_dense=True)

@@ -13,6 +13,7 @@ The file is chunked and flushed after each chunk, so a killed run leaves every c
 readable by a streaming MCAP reader (``analysis.bag`` reads such files); ``metadata.yaml`` is
 written when the bag opens and rewritten with the final counts when it closes.
 """
+from importlib.metadata import version
 from pathlib import Path
 
 import yaml
@@ -67,7 +68,6 @@ class BagRecorder:
         self.path.mkdir(parents=True, exist_ok=True)
         self.file_name = f"{self.path.name}_0.mcap"
         self._stream = _FlushingFile(self.path / self.file_name)
-        from importlib.metadata import version
         self._writer = Writer(self._stream, chunk_size=chunk_size, compression=CompressionType.NONE)
         self._writer.start(profile="ros2", library=f"gpusph_ros {version('gpusph_ros')}; mcap {version('mcap')}")
         self._writer.add_metadata("gpusph_ros", {k: str(v) for k, v in metadata.items()})
