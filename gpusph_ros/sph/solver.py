@@ -255,20 +255,30 @@ class Solver:
                                     f"{self.neighbours.max_neighbours}: particles have clumped, or raise "
                                     f"max_neighbours")
 
-    def advance(self, t_target: float) -> float:
+    def reached(self, t_target: float) -> bool:
+        """Whether the simulated time has reached ``t_target`` (to rounding)."""
+        return self.time >= t_target - 1.0e-12 * max(1.0, t_target)
+
+    def advance(self, t_target: float, interrupt=None) -> float:
         """Step until the simulated time reaches ``t_target`` exactly; returns the time.
 
+        ``interrupt``, a callable, is asked before each step: when it answers true the solver
+        stops early, between two steps (a node pausing mid-interval); ``reached`` tells.
         Raises HealthError when a step fails a check; the state is then the last healthy one.
         """
         self._sync()
-        while self.time < t_target - 1.0e-12 * max(1.0, t_target):
+        while not self.reached(t_target):
             batch = 1
             if self.dt_stable > 0.0:
                 batch = int(min(_MAX_BATCH, max(1, 0.9 * (t_target - self.time) / self.dt_stable)))
             before = self.time
             for _ in range(batch):
+                if interrupt is not None and interrupt():
+                    break
                 self._launch_step(t_target)
             self._sync()
+            if interrupt is not None and interrupt():
+                break
             if self.time <= before:
                 raise RuntimeError(f"simulated time is stuck at {self.time!r} s short of {t_target!r} s")
         return self.time
@@ -303,7 +313,8 @@ class Solver:
         """Host copies of the state in the caller's particle order: pos, vel (n x 3), rho, pressure,
         mass (n), ptype, body (n); with SPS also the stress (sps_tau_diag, sps_tau_off)."""
         wp.launch(self._eos, dim=self.n, inputs=[self.params, self._fields], device=self.device)
-        slot_of = np.argsort(self.ids.numpy())
+        slot_of = np.empty(self.n, dtype=np.int64)
+        slot_of[self.ids.numpy()] = np.arange(self.n)  # the inverse permutation, O(n) where a sort is O(n log n)
         arrays = {"pos": self.pos, "vel": self.vel, "rho": self.rho, "pressure": self.pressure, "mass": self.mass}
         snap = {name: a.numpy().astype(np.float64)[slot_of] for name, a in arrays.items()}
         snap["ptype"] = self.ptype.numpy()[slot_of]
