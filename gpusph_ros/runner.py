@@ -5,6 +5,7 @@ Outputs fall at k / output_rate for k = 0, 1, ... up to the end time; each carri
 first, then the measurements of the scene's probes and bodies, and every ``particle_every``-th
 output the particle cloud.
 """
+import dataclasses
 import datetime
 import platform
 import time
@@ -20,6 +21,10 @@ from .scenes.build import build
 from .sph import HealthError, NeighbourOverflow, Solver
 
 NAMESPACE = "/sim_node"
+# QoS the node offers and the recording states (rosbag2 replays with it): /clock as Gazebo's bridge
+# offers it, the cloud with depth 1 so a slow subscriber gets the newest and no backlog
+CLOCK_QOS = {"reliable": True, "depth": 10}
+PARTICLES_QOS = {"reliable": True, "depth": 1}
 
 
 class Run:
@@ -33,9 +38,26 @@ class Run:
         self.solver = Solver(self.model.config, self.model.particles)
         self.measurements = Measurements(self.solver, self.model)
         self.cloud = messages.CloudBuilder(self.solver.n, frame_id=frame_id)
-        self.n_outputs = int(np.floor(self.output.end_time * self.output.output_rate + 1e-9)) + 1
         self.next_output = 0
         self.wall = 0.0
+
+    @property
+    def n_outputs(self) -> int:
+        return int(np.floor(self.output.end_time * self.output.output_rate + 1e-9)) + 1
+
+    def set_output(self, **changes):
+        """Change ``Output`` fields mid-run. A new output rate starts its grid at the next output
+        time after the present one."""
+        rate = self.output.output_rate
+        self.output = dataclasses.replace(self.output, **changes)
+        if self.output.output_rate != rate and self.next_output > 0:
+            self.next_output = int(np.floor(self.solver.time * self.output.output_rate + 1e-9)) + 1
+
+    def set_cloud(self, fields=None, frame_id=None):
+        """Change the particle cloud's fields or the frame of every message."""
+        self.frame_id = frame_id or self.frame_id
+        self.cloud = messages.CloudBuilder(self.solver.n, self.cloud.fields[3:] if fields is None else fields,
+                                           self.frame_id)
 
     @property
     def particles_topic(self) -> str:
@@ -59,9 +81,9 @@ class Run:
 
     def open_recording(self, path) -> BagRecorder:
         recorder = BagRecorder(path, self.describe())
-        recorder.add_topic("/clock", "rosgraph_msgs/msg/Clock", qos_yaml(reliable=False, depth=1))
+        recorder.add_topic("/clock", "rosgraph_msgs/msg/Clock", qos_yaml(**CLOCK_QOS))
         if self.output.particle_every:
-            recorder.add_topic(self.particles_topic, "sensor_msgs/msg/PointCloud2", qos_yaml(depth=1))
+            recorder.add_topic(self.particles_topic, "sensor_msgs/msg/PointCloud2", qos_yaml(**PARTICLES_QOS))
         return recorder
 
     def output_messages(self, index: int) -> list:
@@ -74,14 +96,18 @@ class Run:
             out.append((self.particles_topic, self.cloud.build(t, self.solver.snapshot())))
         return out
 
-    def step_output(self) -> list:
-        """Advance to the next output time and return its messages (HealthError on failure)."""
+    def step_output(self, interrupt=None):
+        """Advance to the next output time and return its messages (HealthError on failure);
+        None when ``interrupt`` stopped the solver short of it (``Solver.advance``)."""
         k = self.next_output
+        target = k / self.output.output_rate
         start = time.perf_counter()
-        self.solver.advance(k / self.output.output_rate)
-        msgs = self.output_messages(k)
+        self.solver.advance(target, interrupt)
+        msgs = None
+        if self.solver.reached(target):
+            msgs = self.output_messages(k)
+            self.next_output += 1
         self.wall += time.perf_counter() - start
-        self.next_output += 1
         return msgs
 
     @property
@@ -109,9 +135,12 @@ class Run:
             status = f"failed: {err}"
         except KeyboardInterrupt:
             status = "interrupted"
-        result = {"status": status, "wall_time_s": round(self.wall, 3), "steps": self.solver.steps,
-                  "simulated_time_s": self.solver.time, "mipps": round(self.mipps(), 4),
-                  "outputs": self.next_output}
+        result = self.result(status)
         if recorder is not None:
             recorder.close(result)
         return result
+
+    def result(self, status: str) -> dict:
+        """The result record a recording closes with."""
+        return {"status": status, "wall_time_s": round(self.wall, 3), "steps": self.solver.steps,
+                "simulated_time_s": self.solver.time, "mipps": round(self.mipps(), 4), "outputs": self.next_output}
