@@ -1,0 +1,138 @@
+"""The parameters of sim_node: what each means, what it may be, when it takes effect, and the
+run (scene + run configuration) a set of values describes.
+
+Plain data and checks, no rclpy node: the node declares a ROS parameter with a descriptor for
+each entry of ``PARAMS`` and asks ``check`` before accepting a change, so a parameter file, a
+``-p name:=value`` and a ``ros2 param set`` all get the same reasons.
+"""
+import dataclasses
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..scenes.run import resolve
+from ..scenes.schema import builtin_names, load_scene
+from ..sph.config import BOUNDARIES, DENSITY_DIFFUSIONS, KERNELS, PRECISIONS, ConfigError
+from .messages import PARTICLE_FIELDS
+
+# when a change takes effect
+RESET = "reset"  # needs new particles or buffers: at the next ~/reset
+LIVE = "live"  # from the next step or output
+RECORDING = "recording"  # at the next recording
+STARTUP = "startup"  # read-only, set at start-up
+
+VISCOSITY_CHOICES = ("artificial", "laminar")  # SPS is laminar + the sub-particle-scale stress: `sps`
+
+
+@dataclass(frozen=True)
+class Param:
+    name: str
+    default: object
+    description: str
+    applies: str
+    choices: tuple = ()
+    lo: float = None
+    hi: float = None
+
+
+PARAMS = (
+    Param("scene", "dambreak1_thesis", "built-in scene name (" + ", ".join(builtin_names()) + ") or a path "
+          "to a scene YAML file", RESET),
+    Param("dx", 0.03, "particle spacing [m]", RESET, lo=0.001, hi=1.0),
+    Param("kernel", "cubic_spline", "smoothing kernel (thesis Eq. 2.6-2.8; wendland: Wendland C2)", LIVE,
+          choices=KERNELS),
+    Param("viscosity", "artificial", "viscosity model: artificial (Monaghan 1992, thesis Eq. 2.14) or laminar "
+          "(Morris 1997, thesis Eq. 2.16)", LIVE, choices=VISCOSITY_CHOICES),
+    Param("sps", False, "add the sub-particle-scale turbulence stress to laminar viscosity (Dalrymple & Rogers "
+          "2006, thesis Eq. 2.17-2.20); needs viscosity laminar", LIVE),
+    Param("boundary", "dynamic", "boundary particle model for walls the scene builds of particles", RESET,
+          choices=BOUNDARIES),
+    Param("density_diffusion", "delta", "density treatment: none, or delta-SPH (Molteni & Colagrossi 2009)", LIVE,
+          choices=DENSITY_DIFFUSIONS),
+    Param("precision", "float32", "floating-point precision of the solver state", RESET, choices=PRECISIONS),
+    Param("device", "cpu", "Warp device: cpu or cuda:N", RESET),
+    Param("cfl", 0.3, "Courant number of the adaptive time step (thesis Eq. 2.23)", LIVE, lo=0.01, hi=1.0),
+    Param("c0", 0.0, "speed of sound [m/s]; 0 = 10 sqrt(g H) with the scene's depth H (thesis Section 2.3)",
+          LIVE, lo=0.0, hi=1000.0),
+    Param("end_time", 0.0, "simulated time the run stops at [s]; 0 = the scene's own", LIVE, lo=0.0, hi=1.0e5),
+    Param("output_rate", 0.0, "outputs per simulated second [Hz]: /clock, probes, wrenches and particles; "
+          "0 = the scene's own", LIVE, lo=0.0, hi=1.0e4),
+    Param("real_time_factor", 0.0, "simulated seconds per wall second the node keeps to at most; 0 = as fast "
+          "as possible", LIVE, lo=0.0, hi=1.0e3),
+    Param("publish_particles", True, "build and publish the particle cloud at each output (and record it)", LIVE),
+    Param("particle_fields", list(PARTICLE_FIELDS), "cloud fields after x, y, z (float32 each): any of "
+          + ", ".join(PARTICLE_FIELDS), LIVE, choices=PARTICLE_FIELDS),
+    Param("record_dir", "", "folder that recordings (rosbag2 + MCAP, one sub-folder each) go to; empty = no "
+          "recording", RECORDING),
+    Param("frame_id", "world", "frame of every published message", LIVE),
+    Param("autostart", True, "configure and activate the (lifecycle) node at start-up", STARTUP),
+)
+BY_NAME = {p.name: p for p in PARAMS}
+DEFAULTS = {p.name: p.default for p in PARAMS}
+
+
+def applies_text(name: str) -> str:
+    return {RESET: "at the next ~/reset (it needs new particles)", LIVE: "from the next step",
+            RECORDING: "at the next recording", STARTUP: "at start-up only"}[BY_NAME[name].applies]
+
+
+def _device_names() -> list:
+    import warp as wp
+
+    return [d.alias for d in wp.get_devices()]
+
+
+def _check_one(p: Param, value):
+    """The reason ``value`` is not allowed for ``p``, or None."""
+    if p.name == "particle_fields":
+        bad = [v for v in value if v not in p.choices]
+        if bad:
+            return f"particle_fields: {bad[0]!r} is not one of {', '.join(p.choices)}"
+        if len(set(value)) != len(value):
+            return f"particle_fields: {list(value)} names a field twice"
+    elif p.choices and value not in p.choices:
+        hint = " (for SPS set viscosity laminar and sps true)" if (p.name, value) == ("viscosity", "sps") else ""
+        return f"{p.name}: {value!r} is not one of {', '.join(p.choices)}{hint}"
+    elif p.lo is not None and not (math.isfinite(value) and p.lo <= value <= p.hi):
+        return f"{p.name}: {value!r} is outside [{p.lo:g}, {p.hi:g}] ({p.description})"
+    elif p.name == "device" and value not in _device_names():
+        return f"device: {value!r} is not available here; the devices are {', '.join(_device_names())}"
+    elif p.name == "frame_id" and not value.strip():
+        return "frame_id: an empty frame is not allowed; e.g. world"
+    elif p.name == "record_dir" and value:
+        target = Path(value).expanduser()
+        existing = next(q for q in [target, *target.parents] if q.exists())
+        if not existing.is_dir() or not os.access(existing, os.W_OK):
+            return f"record_dir: {value!r} cannot be written ({existing} is not a writable folder)"
+    return None
+
+
+def check(values: dict, changed=None):
+    """The reason the parameter ``values`` (all of them) make no run, or None. ``changed`` names
+    the parameters being set: they are checked first, one by one, then the whole combination."""
+    for name in changed or BY_NAME:
+        reason = _check_one(BY_NAME[name], values[name])
+        if reason:
+            return reason
+    if values["sps"] and values["viscosity"] != "laminar":
+        return (f"sps: true needs viscosity laminar (SPS adds the sub-particle-scale stress to laminar "
+                f"viscosity); viscosity is {values['viscosity']!r}")
+    try:
+        run_settings(values)
+    except ConfigError as err:
+        return str(err)
+    return None
+
+
+def run_settings(values: dict):
+    """(scene, RunConfig) of the parameter ``values``; ConfigError when they make no run."""
+    scene = load_scene(values["scene"])
+    output = {k: values[k] for k in ("end_time", "output_rate") if values[k] > 0.0}
+    numerics = {k: values[k] for k in ("dx", "kernel", "boundary", "density_diffusion", "precision", "device",
+                                       "cfl", "c0")}
+    numerics["viscosity"] = "sps" if values["sps"] else values["viscosity"]
+    config = resolve(scene, **numerics, **output, particle_rate=0.0)  # the node's clouds follow output_rate
+    rate = config.output.output_rate if values["publish_particles"] else 0.0
+    config.output = dataclasses.replace(config.output, particle_rate=rate)
+    return scene, config

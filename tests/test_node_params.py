@@ -1,0 +1,76 @@
+"""sim_node's parameter table and checks (gpusph_ros.ros.node_params), and the shipped parameter
+files: every file names known parameters and describes a run."""
+from pathlib import Path
+
+import pytest
+import yaml
+
+from gpusph_ros.ros import node_params
+from gpusph_ros.ros.node_params import DEFAULTS, PARAMS, check, run_settings
+from gpusph_ros.scenes.schema import builtin_names
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def _values(**changes):
+    return {**DEFAULTS, **changes}
+
+
+def test_the_issue_list_of_parameters_is_declared():
+    names = {p.name for p in PARAMS}
+    assert names == {"scene", "dx", "kernel", "viscosity", "sps", "boundary", "density_diffusion", "precision",
+                     "device", "cfl", "c0", "end_time", "output_rate", "real_time_factor", "publish_particles",
+                     "particle_fields", "record_dir", "frame_id", "autostart"}
+    for p in PARAMS:
+        assert p.description and p.applies in (node_params.RESET, node_params.LIVE, node_params.RECORDING,
+                                               node_params.STARTUP)
+
+
+def test_defaults_describe_a_run():
+    assert check(_values()) is None
+    scene, config = run_settings(_values())
+    assert scene.name == "dambreak1_thesis" and config.numerics["dx"] == 0.03
+    assert config.output.end_time == 3.0 and config.output.output_rate == 100.0  # the scene's own
+    assert config.output.particle_every == 1  # a cloud at every output
+
+
+@pytest.mark.parametrize("changes, words", [
+    ({"kernel": "gauss"}, ["kernel", "'gauss'", "quadratic, cubic_spline, wendland"]),
+    ({"viscosity": "sps"}, ["viscosity", "artificial, laminar", "sps true"]),
+    ({"sps": True}, ["sps", "laminar", "'artificial'"]),
+    ({"boundary": "planes"}, ["boundary", "lennard_jones, monaghan_kajtar, dynamic"]),
+    ({"dx": 0.0}, ["dx", "[0.001, 1]"]),
+    ({"cfl": 1.5}, ["cfl", "[0.01, 1]"]),
+    ({"device": "cuda:7"}, ["device", "'cuda:7'", "cpu"]),
+    ({"scene": "no_such_scene"}, ["scene", "no_such_scene", "dambreak1_thesis"]),
+    ({"particle_fields": ["vx", "speed"]}, ["particle_fields", "'speed'", "density"]),
+    ({"particle_fields": ["vx", "vx"]}, ["particle_fields", "twice"]),
+    ({"frame_id": " "}, ["frame_id"]),
+    ({"record_dir": str(REPO / "setup.py" / "bags")}, ["record_dir", "writable"]),
+])
+def test_a_bad_value_gets_a_reason_naming_the_field_and_the_allowed_values(changes, words):
+    reason = check(_values(**changes), changed=changes)
+    assert reason is not None
+    for word in words:
+        assert word in reason, (word, reason)
+
+
+def test_a_combination_is_checked_as_a_whole():
+    assert check(_values(scene="collapse_2d", dx=0.0025)) is None
+    assert check(_values(viscosity="laminar", sps=True)) is None
+    scene, config = run_settings(_values(viscosity="laminar", sps=True))
+    assert config.numerics["viscosity"] == "sps"
+    _, config = run_settings(_values(publish_particles=False))
+    assert config.output.particle_every == 0
+
+
+def test_shipped_parameter_files_cover_every_scene_and_describe_runs():
+    files = {p.stem: p for p in (REPO / "config/params").glob("*.yaml")}
+    assert set(files) == set(builtin_names())
+    default = yaml.safe_load((REPO / "config/sim_node.yaml").read_text())["sim_node"]["ros__parameters"]
+    assert default == DEFAULTS  # the default file lists every parameter at its declared default
+    for name, path in files.items():
+        values = yaml.safe_load(path.read_text())["sim_node"]["ros__parameters"]
+        assert set(values) <= set(DEFAULTS), path
+        assert values["scene"] == name
+        assert check(_values(**values)) is None, path
