@@ -1,17 +1,310 @@
 """sim_node: the solver live in ROS 2.
 
-For now this entry point reports the package and solver versions; the node itself (parameters,
-services, topics, recording) is its own piece of work.
+    ros2 run gpusph_ros sim_node [--ros-args --params-file FILE -p name:=value ...]
+
+A lifecycle (managed) node and a thin shell over ``runner.Run``: the parameters (``node_params``)
+describe a run, configuring builds it, activating steps it in its own thread (``session``), and
+each output goes out on the node's topics and, while recording, into a rosbag2/MCAP bag. With
+``autostart`` (the default) the node configures and activates itself.
+
+Topics: ``~/particles`` (PointCloud2: x, y, z, then ``particle_fields``, float32), ``~/bodies/<name>/
+wrench`` (WrenchStamped, force on the body's particles and torque about the body's centre, frame
+``frame_id``), ``~/bodies/<name>/pressure_blocks/dNNNmm`` (the thesis's pressure-block force),
+``~/probes/<name>`` (Vector3Stamped velocity, FluidPressure, PointStamped surface level), ``/clock``
+(before the outputs it stamps) and ``/diagnostics`` (1 Hz). Every stamp is simulated time.
+Services (std_srvs): ``~/reset``, ``~/set_paused``, ``~/step``, ``~/record``.
 """
 import sys
 
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.qos_overriding_options import QoSOverridingOptions
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import PointCloud2
+from std_srvs.srv import SetBool, Trigger
+
 from .. import __version__
+from ..runner import CLOCK_QOS, PARTICLES_QOS, Run
+from ..sph import ConfigError
+from . import messages, node_params
+from .node_params import PARAMS
+from .session import Session
+
+STEP_WAIT = 30.0  # [s] the longest ~/step waits for its output before it answers
+
+
+def _qos(reliable: bool, depth: int) -> QoSProfile:
+    return QoSProfile(depth=depth, reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT)
+
+
+def _descriptor(p) -> ParameterDescriptor:
+    text = f"{p.description}. Applies {node_params.applies_text(p.name)}."
+    if p.choices:
+        text += " One of: " + ", ".join(p.choices) + "."
+    d = ParameterDescriptor(description=text, read_only=p.applies == node_params.STARTUP)
+    if p.lo is not None:
+        d.floating_point_range = [FloatingPointRange(from_value=float(p.lo), to_value=float(p.hi), step=0.0)]
+    return d
+
+
+class SimNode(LifecycleNode):
+    def __init__(self, **kwargs):
+        super().__init__("sim_node", **kwargs)
+        for p in PARAMS:
+            self.declare_parameter(p.name, p.default, _descriptor(p))
+        self.namespace = self.get_fully_qualified_name()
+        self._fixed_pubs = {
+            "/clock": self.create_publisher(Clock, "/clock", _qos(**CLOCK_QOS)),
+            f"{self.namespace}/particles": self.create_publisher(
+                PointCloud2, "~/particles", _qos(**PARTICLES_QOS),
+                qos_overriding_options=QoSOverridingOptions.with_default_policies()),
+        }
+        self._topic_pubs = dict(self._fixed_pubs)
+        self._diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        self.awaiting_reset = set()  # parameters changed since the last build that need one
+        self.add_on_set_parameters_callback(self._check_parameters)
+        self.add_post_set_parameters_callback(self._apply_parameters)
+        self.session = Session(self._publish, self._report)
+        services = MutuallyExclusiveCallbackGroup()  # long ones (reset, step) never block parameter calls
+        self.create_service(Trigger, "~/reset", self._reset, callback_group=services)
+        self.create_service(SetBool, "~/set_paused", self._set_paused, callback_group=services)
+        self.create_service(Trigger, "~/step", self._step, callback_group=services)
+        self.create_service(SetBool, "~/record", self._record, callback_group=services)
+        self.create_timer(1.0, self._publish_diagnostics)
+        self.get_logger().info(f"gpusph_ros {__version__}")
+        if self.value("autostart"):
+            self.trigger_configure()
+            if self.session.run is not None:
+                self.trigger_activate()
+
+    def value(self, name):
+        return self.get_parameter(name).value
+
+    def values(self) -> dict:
+        return {p.name: self.value(p.name) for p in PARAMS}
+
+    # -- parameters ----------------------------------------------------------------------------
+    def _check_parameters(self, parameters) -> SetParametersResult:
+        changes = {p.name: p.value for p in parameters if p.name in node_params.BY_NAME}
+        if not changes:
+            return SetParametersResult(successful=True)
+        reason = node_params.check({**self.values(), **changes}, changed=changes)
+        if reason:
+            self.get_logger().warning(f"rejected {', '.join(changes)}: {reason}")
+            return SetParametersResult(successful=False, reason=reason)
+        return SetParametersResult(successful=True)
+
+    def set_parameters_atomically(self, parameter_list):
+        """As Node's, and a successful change's reply says when it takes effect (rclpy keeps only
+        a failed callback's reason, so the note is added here, where the parameter service asks)."""
+        result = super().set_parameters_atomically(parameter_list)
+        names = [p.name for p in parameter_list if p.name in node_params.BY_NAME]
+        if result.successful and names:
+            result.reason = "; ".join(f"{name} applies {node_params.applies_text(name)}" for name in names)
+        return result
+
+    def _apply_parameters(self, parameters):
+        changes = {p.name: p.value for p in parameters if p.name in node_params.BY_NAME}
+        live = {k: v for k, v in changes.items() if node_params.BY_NAME[k].applies == node_params.LIVE}
+        self.awaiting_reset |= {k for k in changes if node_params.BY_NAME[k].applies == node_params.RESET}
+        if self.session.run is not None and live:
+            self.session.change(**self._live_settings(live))
+        if "record_dir" in changes and not changes["record_dir"]:
+            self.session.stop_recording("stopped")
+        if self.awaiting_reset & set(changes):
+            self.get_logger().info(f"{', '.join(sorted(self.awaiting_reset))} changed: applies at the next ~/reset")
+
+    def _live_settings(self, live: dict) -> dict:
+        """Live parameter changes as the solver's and the run's settings."""
+        values = {**self.values(), **live}
+        scene, config = node_params.run_settings(values)
+        out = {k: v for k, v in live.items() if k in ("kernel", "cfl", "c0", "density_diffusion", "particle_fields",
+                                                       "frame_id", "real_time_factor")}
+        if {"viscosity", "sps"} & set(live):
+            out["viscosity"] = config.numerics["viscosity"]
+        if {"end_time", "output_rate", "publish_particles"} & set(live):
+            out.update(end_time=config.output.end_time, output_rate=config.output.output_rate,
+                       particle_rate=config.output.particle_rate)
+        return out
+
+    # -- building ------------------------------------------------------------------------------
+    def _build(self) -> Run:
+        values = self.values()
+        scene, config = node_params.run_settings(values)
+        run = Run(scene, config, namespace=self.namespace, frame_id=values["frame_id"])
+        run.set_cloud(fields=values["particle_fields"])
+        self._make_publishers(run)
+        return run
+
+    def _make_publishers(self, run):
+        """One publisher per topic of the scene's outputs (found from the outputs at t = 0);
+        those of the previous scene that this one lacks are removed."""
+        wanted = {topic: type(msg) for topic, msg in run.output_messages(0)}
+        for topic in list(self._topic_pubs):
+            if topic not in self._fixed_pubs and topic not in wanted:
+                self.destroy_publisher(self._topic_pubs.pop(topic))
+        for topic, msg_type in wanted.items():
+            if topic not in self._topic_pubs:
+                self._topic_pubs[topic] = self.create_publisher(msg_type, topic, 10)
+
+    def _load(self) -> str:
+        """Build the run from the parameters; a one-line account of it."""
+        run = self.session.replace(self._build)
+        self.session.real_time_factor = self.value("real_time_factor")
+        self.awaiting_reset.clear()
+        cfg = run.model.config
+        fluid = int((run.model.particles.ptype == 0).sum())
+        text = (f"{run.scene.name}: dx = {cfg.dx:g} m, {run.solver.n} particles ({fluid} fluid), {cfg.kernel} kernel, "
+                f"{cfg.viscosity} viscosity, {cfg.boundary} boundaries, {cfg.density_diffusion} density diffusion, "
+                f"{cfg.precision} on {run.solver.device}; to t = {run.output.end_time:g} s, outputs at "
+                f"{run.output.output_rate:g} Hz")
+        self.get_logger().info(text)
+        return text
+
+    def _maybe_record(self) -> str:
+        directory = self.value("record_dir")
+        if not directory or self.session.run is None:
+            return ""
+        return f"; recording to {self.session.start_recording(directory)}"
+
+    # -- lifecycle -----------------------------------------------------------------------------
+    def on_configure(self, state) -> TransitionCallbackReturn:
+        reason = node_params.check(self.values())
+        if reason:
+            self.get_logger().error(f"cannot configure: {reason}")
+            return TransitionCallbackReturn.FAILURE
+        try:
+            self._load()
+        except (ConfigError, ValueError, RuntimeError) as err:
+            self.get_logger().error(f"cannot configure: {err}")
+            return TransitionCallbackReturn.FAILURE
+        return super().on_configure(state)
+
+    def on_activate(self, state) -> TransitionCallbackReturn:
+        self.session.set_active(True)
+        note = self._maybe_record()
+        if note:
+            self.get_logger().info(note[2:])
+        return super().on_activate(state)
+
+    def on_deactivate(self, state) -> TransitionCallbackReturn:
+        self.session.set_active(False)
+        return super().on_deactivate(state)
+
+    def on_cleanup(self, state) -> TransitionCallbackReturn:
+        self.session.clear()
+        return super().on_cleanup(state)
+
+    def on_shutdown(self, state) -> TransitionCallbackReturn:
+        self.session.close("shutdown")
+        return super().on_shutdown(state)
+
+    # -- services ------------------------------------------------------------------------------
+    def _reset(self, request, response):
+        reason = node_params.check(self.values())
+        if reason:
+            response.success, response.message = False, f"not reset: {reason}"
+            return response
+        if self.session.run is None:
+            configured = self.trigger_configure() == TransitionCallbackReturn.SUCCESS
+            if configured and self.value("autostart"):
+                self.trigger_activate()
+            response.success = configured
+            response.message = (f"configured: {self._account()}" if configured
+                                 else "configuring failed; see the node's log")
+            return response
+        try:
+            text = self._load()
+        except (ConfigError, ValueError, RuntimeError) as err:
+            response.success, response.message = False, f"not reset, the previous scene stays: {err}"
+            return response
+        response.success, response.message = True, f"reset: {text}; {self.session.state}{self._maybe_record()}"
+        return response
+
+    def _account(self) -> str:
+        run = self.session.run
+        return "no scene" if run is None else f"{run.scene.name}, {run.solver.n} particles, {self.session.state}"
+
+    def _set_paused(self, request, response):
+        response.success, response.message = self.session.set_paused(request.data)
+        return response
+
+    def _step(self, request, response):
+        response.success, response.message = self.session.step(STEP_WAIT)
+        return response
+
+    def _record(self, request, response):
+        if not request.data:
+            path = self.session.stop_recording("stopped")
+            response.success = True
+            response.message = f"recording stopped: {path}" if path else "was not recording"
+            return response
+        directory = self.value("record_dir")
+        if not directory:
+            response.success = False
+            response.message = "record_dir is empty: set it first (ros2 param set /sim_node record_dir /some/folder)"
+        elif self.session.run is None:
+            response.success, response.message = False, "no scene is loaded: configure the node (or call ~/reset)"
+        else:
+            try:
+                response.success, response.message = True, f"recording to {self.session.start_recording(directory)}"
+            except OSError as err:
+                response.success, response.message = False, f"cannot record to {directory}: {err}"
+        return response
+
+    # -- output --------------------------------------------------------------------------------
+    def _publish(self, topic, msg, data):
+        publisher = self._topic_pubs.get(topic)
+        if publisher is not None:
+            publisher.publish(data)
+
+    def _report(self, level, text):
+        if level == "error":
+            self.get_logger().error(text)
+        else:
+            self.get_logger().info(text)
+        self._publish_diagnostics()
+
+    def _publish_diagnostics(self):
+        stats = self.session.stats()
+        state = stats["state"]
+        level = {"failed": DiagnosticStatus.ERROR, "unconfigured": DiagnosticStatus.WARN}.get(state, DiagnosticStatus.OK)
+        message = f"failed: {stats['error']}" if state == "failed" else state
+        if self.awaiting_reset:
+            message += f" ({', '.join(sorted(self.awaiting_reset))} changed: applies at the next ~/reset)"
+        status = DiagnosticStatus(level=level, name=f"{self.get_name()}: solver", message=message,
+                                  hardware_id=str(stats.get("device", self.value("device"))))
+        status.values = [KeyValue(key=key, value=_text(value)) for key, value in stats.items()]
+        msg = DiagnosticArray(status=[status])
+        msg.header.stamp = messages.stamp(stats.get("simulated_time", 0.0))
+        self._diag_pub.publish(msg)
+
+
+def _text(value) -> str:
+    return f"{value:.6g}" if isinstance(value, float) else str(value)
 
 
 def main(argv=None):
-    import warp
+    import warp as wp
 
-    print(f"gpusph_ros sim_node {__version__} (warp {warp.config.version})")
+    wp.config.log_level = wp.LOG_WARNING  # no per-module load lines in the node's output
+    rclpy.init(args=sys.argv if argv is None else argv)
+    node = SimNode()
+    executor = MultiThreadedExecutor(num_threads=4)
+    executor.add_node(node)
+    try:
+        executor.spin()
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        node.session.close("interrupted")
+        node.destroy_node()
+        rclpy.try_shutdown()
     return 0
 
 

@@ -1,0 +1,286 @@
+"""The node's solver thread: steps a ``Run`` from output to output, serialises each output's
+messages once for the publishers and the recording, keeps to a real-time factor, and stops
+between two steps for a pause, a step request, a reset, a live parameter change or shut-down.
+
+ROS callbacks run in other threads and only set flags and wait briefly: the solver asks
+``_interrupted`` before every step, so nothing waits longer than one step. All Warp work runs
+in this thread, except a reset's build, which runs while this thread is held idle.
+"""
+import datetime
+import threading
+import time
+from pathlib import Path
+
+from rclpy.serialization import serialize_message
+
+from ..sph import HealthError, NeighbourOverflow
+
+_NUMERIC_LIVE = {"kernel", "viscosity", "density_diffusion", "cfl", "c0"}
+_OUTPUT_LIVE = {"end_time", "output_rate", "particle_rate"}
+
+
+class Session:
+    """``publish(topic, message, data)`` sends one output message (``data``: its CDR bytes);
+    ``report(level, text)`` tells the node of a failure or the end of the run. Both are called
+    from the solver thread."""
+
+    def __init__(self, publish, report):
+        self._publish, self._report = publish, report
+        self._cond = threading.Condition()
+        self._record_lock = threading.Lock()
+        self.run = None
+        self.active = False  # the lifecycle state allows stepping
+        self.paused = False
+        self.failure = ""  # why the solver stopped; "" while healthy
+        self.real_time_factor = 0.0
+        self.recorder = None
+        self._steps_wanted = 0
+        self._busy = self._hold = self._closing = False
+        self._pending = {}
+        self._pace = None  # (wall, simulated time) the real-time factor counts from
+        self._window = None
+        self._thread = threading.Thread(target=self._loop, name="solver", daemon=True)
+        self._thread.start()
+
+    # -- state ----------------------------------------------------------------------------------
+    @property
+    def state(self) -> str:
+        run = self.run
+        if run is None:
+            return "unconfigured"
+        if self.failure:
+            return "failed"
+        if run.done:
+            return "finished"
+        if self._steps_wanted:
+            return "stepping"
+        if not self.active:
+            return "inactive"
+        return "paused" if self.paused else "running"
+
+    def _can_advance(self) -> bool:
+        run = self.run
+        if run is None or self.failure or run.done or self._hold:
+            return False
+        return self._steps_wanted > 0 or (self.active and not self.paused)
+
+    def _interrupted(self) -> bool:
+        return (self._closing or self._hold or bool(self._pending)
+                or not (self._steps_wanted > 0 or (self.active and not self.paused)))
+
+    def stats(self) -> dict:
+        """Figures for /diagnostics; rates over the time since the previous call."""
+        run = self.run
+        out = {"state": self.state, "error": self.failure,
+               "recording": str(self.recorder.path) if self.recorder else ""}
+        if run is None:
+            return out
+        solver, now = run.solver, time.perf_counter()
+        window, self._window = self._window, (now, solver.steps, solver.time, run)
+        steps_per_s = rtf = 0.0
+        if window is not None and window[3] is run and now > window[0]:
+            steps_per_s = (solver.steps - window[1]) / (now - window[0])
+            rtf = (solver.time - window[2]) / (now - window[0])
+        out.update(scene=run.scene.name, simulated_time=solver.time, dt=solver.dt, particles=solver.n,
+                   steps=solver.steps, steps_per_s=steps_per_s, mipps=steps_per_s * solver.n / 1e6,
+                   real_time_factor=rtf, device=str(solver.device), precision=run.model.config.precision,
+                   end_time=run.output.end_time)
+        return out
+
+    # -- the thread ----------------------------------------------------------------------------
+    def _loop(self):
+        while True:
+            with self._cond:
+                while True:
+                    if self._closing:
+                        return
+                    if not self._hold:
+                        self._apply_pending()
+                    if self._can_advance():
+                        break
+                    self._cond.wait()
+                run, self._busy = self.run, True
+            try:
+                self._advance(run)
+            finally:
+                with self._cond:
+                    self._busy = False
+                    self._cond.notify_all()
+
+    def _apply_pending(self):
+        changes, self._pending = self._pending, {}
+        run = self.run
+        if "real_time_factor" in changes:
+            self.real_time_factor = changes.pop("real_time_factor")
+            self._pace = None
+        if run is None:
+            return
+        numerics = {k: v for k, v in changes.items() if k in _NUMERIC_LIVE}
+        if numerics:
+            run.solver.reconfigure(**numerics)
+        output = {k: v for k, v in changes.items() if k in _OUTPUT_LIVE}
+        if output:
+            run.set_output(**output)
+        if "particle_fields" in changes or "frame_id" in changes:
+            run.set_cloud(changes.get("particle_fields"), changes.get("frame_id"))
+
+    def _advance(self, run):
+        try:
+            msgs = run.step_output(self._interrupted)
+        except (HealthError, NeighbourOverflow, RuntimeError) as err:  # RuntimeError: time stuck, device error
+            with self._cond:
+                self.failure, self.paused, self._steps_wanted = str(err), True, 0
+            self.stop_recording(f"failed: {err}")
+            self._report("error", f"the solver stopped at t = {run.solver.time:.4f} s: {err}; the node is paused "
+                                  f"and still serving; ~/reset rebuilds the scene")
+            return
+        if msgs is None:
+            return
+        t = run.solver.time
+        self._emit(msgs, t)
+        with self._cond:
+            self._steps_wanted = max(0, self._steps_wanted - 1)
+        if run.done:
+            self.stop_recording("completed")
+            self._report("info", f"reached end_time = {run.output.end_time:g} s after {run.solver.steps} steps")
+        self._keep_pace(t)
+
+    def _emit(self, msgs, t):
+        with self._record_lock:
+            for topic, msg in msgs:
+                data = serialize_message(msg)  # once, for the publisher and the file
+                self._publish(topic, msg, data)
+                if self.recorder is not None:
+                    self.recorder.write(topic, msg, t, data)
+
+    def _keep_pace(self, t):
+        rtf = self.real_time_factor
+        if rtf <= 0.0:
+            return
+        now = time.monotonic()
+        if self._pace is None:
+            self._pace = (now, t)
+        due = self._pace[0] + (t - self._pace[1]) / rtf
+        if due < now - 1.0:  # more than a second behind: keep the pace from here, owe nothing
+            self._pace = (now, t)
+        with self._cond:
+            while not self._interrupted() and time.monotonic() < due:
+                self._cond.wait(due - time.monotonic())
+
+    # -- requests from ROS callbacks -----------------------------------------------------------
+    def change(self, **changes):
+        """Live changes (``_NUMERIC_LIVE``, ``_OUTPUT_LIVE``, particle_fields, frame_id,
+        real_time_factor), applied by the solver thread before its next step."""
+        with self._cond:
+            self._pending.update(changes)
+            self._cond.notify_all()
+
+    def set_active(self, active: bool):
+        with self._cond:
+            self.active = active
+            self._pace = None
+            self._cond.notify_all()
+
+    def set_paused(self, paused: bool) -> tuple:
+        """(success, message)."""
+        with self._cond:
+            run = self.run
+            if run is None:
+                return False, "no scene is loaded: configure the node (or call ~/reset)"
+            if not paused and self.failure:
+                return False, f"the run failed ({self.failure}); ~/reset rebuilds the scene"
+            if not paused and not self.active:
+                return False, "the node is inactive: activate it (ros2 lifecycle set /sim_node activate)"
+            self.paused, self._pace = paused, None
+            self._cond.notify_all()
+            t = run.solver.time
+            if paused:
+                return True, f"paused at t = {t:.4f} s (the solver stops before its next step)"
+            if run.done:
+                return True, f"resumed, but the run is at end_time = {run.output.end_time:g} s; raise end_time or ~/reset"
+            return True, f"running from t = {t:.4f} s"
+
+    def step(self, timeout: float) -> tuple:
+        """Advance one output interval while paused; waits up to ``timeout`` s for it."""
+        with self._cond:
+            run = self.run
+            if run is None:
+                return False, "no scene is loaded: configure the node (or call ~/reset)"
+            if self.failure:
+                return False, f"the run failed ({self.failure}); ~/reset rebuilds the scene"
+            if run.done:
+                return False, f"the run is at end_time = {run.output.end_time:g} s; raise end_time or ~/reset"
+            if self.active and not self.paused:
+                return False, "the solver is running; pause it first (~/set_paused true)"
+            k = run.next_output + self._steps_wanted
+            self._steps_wanted += 1
+            self._cond.notify_all()
+            deadline = time.monotonic() + timeout
+            while run.next_output <= k and not self.failure and run is self.run and time.monotonic() < deadline:
+                self._cond.wait(max(0.0, deadline - time.monotonic()))
+            target = k / run.output.output_rate
+            if self.failure:
+                return False, f"the step failed: {self.failure}"
+            if run.next_output <= k:
+                return True, f"stepping to t = {target:.4f} s (still running after {timeout:g} s; watch /clock)"
+            return True, f"stepped to t = {run.solver.time:.4f} s ({run.solver.steps} steps in all)"
+
+    def replace(self, build):
+        """Stop the solver between two steps, build a new run with ``build()`` and make it
+        current (paused or running as before). If ``build`` raises, the old run stays."""
+        with self._cond:
+            self._hold = True
+            self._cond.notify_all()
+            while self._busy:
+                self._cond.wait()
+        try:
+            run = build()
+        except BaseException:
+            with self._cond:
+                self._hold = False
+                self._cond.notify_all()
+            raise
+        self.stop_recording("reset")
+        with self._cond:
+            self.run, self.failure, self._steps_wanted, self._pending = run, "", 0, {}
+            self._pace = self._window = None
+            self._hold = False
+            self._cond.notify_all()
+        return run
+
+    def clear(self):
+        """Drop the run (lifecycle cleanup)."""
+        self.stop_recording("stopped")
+        with self._cond:
+            self._hold = True
+            while self._busy:
+                self._cond.wait()
+            self.run, self.failure, self._hold = None, "", False
+
+    def close(self, status: str = "interrupted"):
+        """Stop the thread (between two steps) and finish the recording."""
+        with self._cond:
+            self._closing = True
+            self._cond.notify_all()
+        self._thread.join()
+        self.stop_recording(status)
+
+    # -- recording -----------------------------------------------------------------------------
+    def start_recording(self, directory) -> Path:
+        """Start a new bag under ``directory`` (``<scene>_<UTC time>``); returns its path."""
+        with self._record_lock:
+            if self.recorder is not None:
+                return self.recorder.path
+            run = self.run
+            stamp = datetime.datetime.now(datetime.timezone.utc).strftime("%Y_%m_%d-%H_%M_%S_%f")
+            self.recorder = run.open_recording(Path(directory).expanduser() / f"{run.scene.name}_{stamp}")
+            return self.recorder.path
+
+    def stop_recording(self, status: str):
+        """Finish the recording, if any, with the run's result under ``status``; returns its path."""
+        with self._record_lock:
+            recorder, self.recorder = self.recorder, None
+            if recorder is None:
+                return None
+            recorder.close(self.run.result(status) if self.run is not None else {"status": status})
+            return recorder.path
