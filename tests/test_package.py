@@ -51,12 +51,6 @@ def test_setup_cfg_puts_scripts_where_ros2_run_looks():
     assert "install_scripts=$base/lib/gpusph_ros" in text
 
 
-def test_sim_node_entry_point_runs():
-    out = subprocess.run([sys.executable, "-m", "gpusph_ros.ros.sim_node"], capture_output=True, text=True,
-                         cwd=REPO)
-    assert out.returncode == 0 and "gpusph_ros sim_node" in out.stdout
-
-
 def test_solver_imports_nothing_from_ros():
     code = ("import sys, gpusph_ros.sph, gpusph_ros.scenes.boxes; "
             "bad = [m for m in sys.modules if m.split('.')[0] in ('rclpy', 'rosidl_runtime_py', 'sensor_msgs') "

@@ -1,0 +1,363 @@
+"""sim_node as a user meets it: built by colcon, found and started as `ros2 run` does, in its own
+process, and driven by a client node over ROS 2 (parameters, services, topics, recording).
+
+The scene is DamBreak 1 at 6 cm (4,385 particles) and the 2D collapse at 2.5 mm, so the node
+steps at tens of outputs a second on a CPU. The tests run in file order against one node.
+"""
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from geometry_msgs.msg import WrenchStamped
+from rosbags.highlevel import AnyReader
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import PointCloud2
+from std_srvs.srv import SetBool, Trigger
+
+from gpusph_ros.analysis import bag as bag_reader
+from gpusph_ros.ros.messages import cloud_arrays
+from gpusph_ros.scenes.build import build
+from gpusph_ros.scenes.schema import load_scene
+
+from ros_client import Client
+
+REPO = Path(__file__).resolve().parents[1]
+BIN = Path(sys.executable).parent
+DOMAIN = 101 + os.getpid() % 100  # a DDS domain of this test run's own
+WRENCH = "/sim_node/bodies/obstruction/wrench"
+PARTICLES = "/sim_node/particles"
+
+
+def _t(stamp) -> float:
+    return stamp.sec + stamp.nanosec * 1e-9
+
+
+def _node_env(base: dict) -> dict:
+    return {**base, "ROS_DOMAIN_ID": str(DOMAIN), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
+            "PYTHONUNBUFFERED": "1"}
+
+
+@pytest.fixture(scope="module")
+def workspace(tmp_path_factory):
+    """A colcon workspace with this repository as its one package, built; (root, colcon list output)."""
+    ws = tmp_path_factory.mktemp("ws")
+    (ws / "src").mkdir()
+    (ws / "src/gpusph_ros").symlink_to(REPO)
+    env = {**os.environ, "PATH": f"{BIN}:{os.environ['PATH']}"}
+    listed = subprocess.run([BIN / "colcon", "list", "--base-paths", "src"], cwd=ws, env=env,
+                            capture_output=True, text=True)
+    assert listed.returncode == 0, listed.stderr
+    built = subprocess.run([BIN / "colcon", "build", "--base-paths", "src"], cwd=ws, env=env,
+                           capture_output=True, text=True)
+    assert built.returncode == 0, built.stdout[-3000:] + built.stderr[-3000:]
+    return ws, listed.stdout
+
+
+@pytest.fixture(scope="module")
+def sourced(workspace):
+    """The environment after `source install/setup.bash`, as a ROS 2 user's shell has it."""
+    ws, _ = workspace
+    out = subprocess.run(["bash", "-c", f"source {ws}/install/setup.bash && env -0"], capture_output=True,
+                         env={**os.environ, "PATH": f"{BIN}:{os.environ['PATH']}"})
+    assert out.returncode == 0, out.stderr
+    return dict(item.split("=", 1) for item in out.stdout.decode().split("\0") if "=" in item)
+
+
+def _ros2_run_lookup(env) -> Path:
+    """What `ros2 run gpusph_ros sim_node` does: the package's prefix from the ament index on
+    AMENT_PREFIX_PATH, then <prefix>/lib/<package>/<executable>."""
+    code = "from ament_index_python.packages import get_package_prefix as p; print(p('gpusph_ros'))"
+    prefix = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    assert prefix.returncode == 0, prefix.stderr
+    return Path(prefix.stdout.strip()) / "lib/gpusph_ros/sim_node"
+
+
+def _start(command, env, log_path):
+    log = open(log_path, "w")
+    return subprocess.Popen([str(c) for c in command], env=_node_env(env), stdout=log, stderr=subprocess.STDOUT)
+
+
+def _stop(proc, sig=signal.SIGINT, timeout=60.0) -> int:
+    if proc.poll() is None:
+        proc.send_signal(sig)
+    try:
+        return proc.wait(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        raise
+
+
+@pytest.fixture(scope="module")
+def node(sourced, tmp_path_factory):
+    """The node started from the colcon install with the shipped DamBreak 1 parameter file at a
+    coarse spacing; (process, log path)."""
+    exe = _ros2_run_lookup(sourced)
+    share = exe.parents[2] / "share/gpusph_ros/config"
+    log = tmp_path_factory.mktemp("node") / "sim_node.log"
+    proc = _start([exe, "--ros-args", "--params-file", share / "params/dambreak1_thesis.yaml", "-p", "dx:=0.06",
+                   "-p", "end_time:=30.0"], sourced, log)
+    yield proc, log
+    _stop(proc)
+
+
+@pytest.fixture(scope="module")
+def client(node):
+    c = Client(DOMAIN)
+    c.subscribe("/clock", Clock)
+    c.subscribe("/diagnostics", DiagnosticArray)
+    c.subscribe(PARTICLES, PointCloud2, depth=1)
+    c.subscribe(WRENCH, WrenchStamped)
+    try:
+        c.wait_for("/clock", lambda m: len(m) > 3, timeout=300.0)
+    except TimeoutError:
+        pytest.fail("the node published no /clock:\n" + node[1].read_text()[-3000:])
+    yield c
+    c.close()
+
+
+def _diagnostic(client, predicate=lambda s: True, timeout=30.0):
+    """The newest solver status (a dict of its values, with level and message) that satisfies
+    ``predicate``."""
+    def status(msg):
+        s = msg.status[0]
+        return {**{kv.key: kv.value for kv in s.values}, "level": s.level, "message": s.message}
+
+    msgs = client.wait_for("/diagnostics", lambda ms: any(predicate(status(m)) for m in ms), timeout)
+    return [status(m) for m in msgs if predicate(status(m))][-1]
+
+
+def _pause_and_reset(client):
+    assert client.call("set_paused", SetBool, data=True).success
+    reply = client.call("reset", Trigger)
+    assert reply.success, reply.message
+    return reply.message
+
+
+# -- packaging --------------------------------------------------------------------------------
+def test_colcon_lists_an_ament_python_package_and_installs_the_index_and_executable(workspace):
+    ws, listed = workspace
+    assert listed.split() == ["gpusph_ros", "src/gpusph_ros", "(ros.ament_python)"]
+    prefix = ws / "install/gpusph_ros"
+    assert (prefix / "share/ament_index/resource_index/packages/gpusph_ros").is_file()
+    exe = prefix / "lib/gpusph_ros/sim_node"
+    assert exe.is_file() and os.access(exe, os.X_OK)
+    for cfg in ("sim_node.yaml", "params/dambreak1_thesis.yaml", "params/collapse_2d.yaml"):
+        assert (prefix / "share/gpusph_ros/config" / cfg).is_file(), cfg
+
+
+def test_ros2_run_lookup_finds_the_installed_executable(workspace, sourced):
+    ws, _ = workspace
+    assert _ros2_run_lookup(sourced) == ws / "install/gpusph_ros/lib/gpusph_ros/sim_node"
+
+
+# -- running ----------------------------------------------------------------------------------
+def test_the_node_runs_and_reports_itself_on_diagnostics(client):
+    status = _diagnostic(client, lambda s: s["state"] == "running")
+    assert status["level"] == DiagnosticStatus.OK
+    assert status["scene"] == "dambreak1_thesis" and int(status["particles"]) == 4385
+    assert status["device"] == "cpu" and status["precision"] == "float32"
+    for key in ("simulated_time", "dt", "steps", "steps_per_s", "mipps", "real_time_factor", "error"):
+        assert key in status
+    clocks = [_t(m.clock) for m in client.received("/clock")]
+    assert clocks == sorted(clocks) and clocks[-1] > 0.0
+
+
+def test_bad_parameters_are_rejected_with_a_reason_and_change_nothing(client):
+    names = ("kernel", "dx", "sps", "device", "scene", "particle_fields", "autostart", "cfl")
+    before = client.get(*names)
+    for name, value, words in [
+        ("kernel", "gauss", ["'gauss'", "quadratic, cubic_spline, wendland"]),
+        ("sps", True, ["laminar"]),
+        ("device", "cuda:7", ["not available"]),
+        ("scene", "no_such_scene", ["dambreak1_thesis", "collapse_2d"]),
+        ("particle_fields", ["vx", "speed"], ["'speed'"]),
+        ("dx", 5.0, ["dx"]),
+        ("cfl", 0, ["type"]),  # an integer where a double is declared
+        ("autostart", False, ["read-only"]),
+    ]:
+        result, = client.set(**{name: value})
+        assert not result.successful, name
+        for word in words:
+            assert word.lower() in result.reason.lower(), (name, result.reason)
+    assert client.get(*names) == before
+
+
+def test_a_good_change_says_when_it_applies(client):
+    dx, = client.set(dx=0.05)
+    assert dx.successful and "next ~/reset" in dx.reason
+    cfl, = client.set(cfl=0.25)
+    assert cfl.successful and "next step" in cfl.reason
+    assert "dx" in _diagnostic(client, lambda s: "dx" in s["message"])["message"]
+    assert "dx = 0.05 m, 5896 particles" in _pause_and_reset(client)
+    assert client.set(dx=0.06)[0].successful
+    assert "4385 particles" in _pause_and_reset(client)
+
+
+def test_a_paused_node_steps_one_output_and_the_cloud_is_the_scene(client):
+    _pause_and_reset(client)
+    client.clear(PARTICLES)
+    client.clear("/clock")
+    client.clear(WRENCH)
+    reply = client.call("step", Trigger)
+    assert reply.success and "t = 0.0000 s" in reply.message, reply.message
+    cloud = client.wait_for(PARTICLES)[-1]
+    assert _t(cloud.header.stamp) == 0.0 and cloud.header.frame_id == "world"
+    assert [f.name for f in cloud.fields] == ["x", "y", "z", "vx", "vy", "vz", "density", "pressure"]
+    model = build(load_scene("dambreak1_thesis"), dx=0.06)
+    arrays = cloud_arrays(cloud)
+    assert cloud.width == len(model.particles) == 4385
+    pos = np.stack([arrays["x"], arrays["y"], arrays["z"]], axis=1)
+    np.testing.assert_allclose(pos, model.particles.pos, atol=1e-6)  # float32 of the same fill
+    wrench = client.wait_for(WRENCH)[-1]
+    assert _t(wrench.header.stamp) == 0.0
+    # the obstruction stands dry at t = 0: no fluid within a kernel support, no force
+    assert (wrench.wrench.force.x, wrench.wrench.force.y, wrench.wrench.force.z) == (0.0, 0.0, 0.0)
+    # one more step is one output interval (100 Hz), announced on /clock
+    reply = client.call("step", Trigger)
+    assert reply.success and "stepped to t = 0.0100 s" in reply.message, reply.message
+    assert [_t(m.clock) for m in client.wait_for("/clock", lambda m: len(m) >= 2)] == [0.0, 0.01]
+    assert _t(client.wait_for(WRENCH, lambda m: len(m) >= 2)[-1].header.stamp) == 0.01
+    # stepping while running is refused, with what to do
+    assert client.call("set_paused", SetBool, data=False).success
+    reply = client.call("step", Trigger)
+    assert not reply.success and "pause it first" in reply.message
+
+
+def test_pause_holds_the_simulated_time_and_resume_moves_it(client):
+    assert client.call("set_paused", SetBool, data=False).success
+    _diagnostic(client, lambda s: s["state"] == "running")
+    reply = client.call("set_paused", SetBool, data=True)
+    assert reply.success and "paused" in reply.message
+    client.clear("/diagnostics")
+    first = _diagnostic(client, lambda s: s["state"] == "paused")
+    client.clear("/diagnostics")
+    later = _diagnostic(client, lambda s: s["state"] == "paused")
+    assert float(later["simulated_time"]) == float(first["simulated_time"])
+    assert client.call("set_paused", SetBool, data=False).success
+    t0 = float(later["simulated_time"])
+    _diagnostic(client, lambda s: float(s.get("simulated_time", 0)) > t0)
+
+
+def test_reset_into_another_built_in_scene(client):
+    result = client.set_together(scene="collapse_2d", dx=0.0025, end_time=0.3)
+    assert result.successful, result.reason
+    message = _pause_and_reset(client)
+    assert "collapse_2d" in message and "1829 particles" in message, message
+    client.clear(PARTICLES)
+    assert client.call("step", Trigger).success
+    assert client.wait_for(PARTICLES)[-1].width == 1829
+
+    def topics():
+        return {name for name, _ in client.node.get_publisher_names_and_types_by_node("sim_node", "/")}
+
+    deadline = time.monotonic() + 20.0
+    while (WRENCH in topics() or "/sim_node/probes/toe" not in topics()) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert WRENCH not in topics() and "/sim_node/probes/toe" in topics()
+    result = client.set_together(scene="dambreak1_thesis", dx=0.06, end_time=30.0)
+    assert result.successful, result.reason
+    assert "4385 particles" in _pause_and_reset(client)
+
+
+def test_recording_toggles_and_reads_back_with_rosbags(client, tmp_path):
+    reply = client.call("record", SetBool, data=True)
+    assert not reply.success and "record_dir" in reply.message
+    assert client.set(record_dir=str(tmp_path))[0].successful
+    reply = client.call("record", SetBool, data=True)
+    assert reply.success and str(tmp_path) in reply.message, reply.message
+    for _ in range(3):
+        assert client.call("step", Trigger).success
+    reply = client.call("record", SetBool, data=False)
+    assert reply.success, reply.message
+    bag = Path(reply.message.split(": ", 1)[1])
+    assert bag.parent == tmp_path
+    counts, clouds = {}, []
+    with AnyReader([bag]) as reader:
+        order = []
+        for connection, t, raw in reader.messages():
+            counts[connection.topic] = counts.get(connection.topic, 0) + 1
+            order.append(connection.topic)
+            if connection.topic == PARTICLES:
+                clouds.append(reader.deserialize(raw, connection.msgtype))
+    assert counts["/clock"] == counts[WRENCH] == counts[PARTICLES] == 3
+    assert order[0] == "/clock"  # /clock before the outputs it stamps
+    assert clouds[-1].width == 4385
+    assert bag_reader.read(bag).result["status"] == "stopped"
+    assert client.set(record_dir="")[0].successful
+
+
+def test_an_instability_gives_an_error_diagnostic_and_the_node_still_answers(client):
+    assert client.set(c0=0.3)[0].successful  # a sound speed far below 10 sqrt(g H): density runs away
+    assert client.call("set_paused", SetBool, data=False).success
+    status = _diagnostic(client, lambda s: s["state"] == "failed", timeout=120.0)
+    assert status["level"] == DiagnosticStatus.ERROR
+    assert "health check" in status["message"] and "failed" in status["message"]
+    assert client.get("c0") == {"c0": 0.3}  # still answering
+    reply = client.call("set_paused", SetBool, data=False)
+    assert not reply.success and "~/reset" in reply.message
+    assert client.set(c0=0.0)[0].successful
+    reply = client.call("reset", Trigger)
+    assert reply.success, reply.message
+    assert client.call("set_paused", SetBool, data=False).success
+    status = _diagnostic(client, lambda s: s["state"] == "running")
+    assert status["level"] == DiagnosticStatus.OK
+
+
+def test_sigint_finishes_the_recording(node, client, tmp_path):
+    proc, log = node
+    assert client.set(record_dir=str(tmp_path))[0].successful
+    reply = client.call("record", SetBool, data=True)
+    assert reply.success
+    bag = Path(reply.message.split("recording to ", 1)[1])
+    n = len(client.received("/clock"))
+    client.wait_for("/clock", lambda m: len(m) > n + 5)
+    assert _stop(proc, signal.SIGINT) == 0, log.read_text()[-3000:]
+    with AnyReader([bag]) as reader:
+        topics = {c.topic for c in reader.connections}
+        assert sum(1 for _ in reader.messages()) > 5
+    assert {"/clock", PARTICLES, WRENCH} <= topics
+    recording = bag_reader.read(bag)
+    assert recording.complete and recording.result["status"] == "interrupted"
+
+
+def test_lifecycle_mode_without_autostart_and_sigterm_finishes_the_recording(node, client, tmp_path):
+    """`sim_node` from this repository's venv, as a managed node: it waits unconfigured until
+    told, records from activation because record_dir is set, and SIGTERM closes the bag whole."""
+    from lifecycle_msgs.msg import State, Transition
+    from lifecycle_msgs.srv import ChangeState, GetState
+
+    assert node[0].poll() is not None  # the shared node has stopped (previous test)
+    client.clear("/diagnostics")
+    proc = _start([BIN / "sim_node", "--ros-args", "--params-file", REPO / "config/params/collapse_2d.yaml",
+                   "-p", "autostart:=false", "-p", f"record_dir:={tmp_path}", "-p", "end_time:=100.0"],
+                  os.environ, tmp_path / "node.log")
+    try:
+        state = client.call("get_state", GetState, timeout=120.0).current_state
+        assert state.id == State.PRIMARY_STATE_UNCONFIGURED
+        status = _diagnostic(client, lambda s: s["state"] == "unconfigured", timeout=60.0)
+        assert status["level"] == DiagnosticStatus.WARN
+        assert client.call("change_state", ChangeState,
+                           transition=Transition(id=Transition.TRANSITION_CONFIGURE)).success
+        assert client.call("get_state", GetState).current_state.id == State.PRIMARY_STATE_INACTIVE
+        assert _diagnostic(client, lambda s: s["state"] == "inactive")["particles"] == "1829"
+        reply = client.call("set_paused", SetBool, data=False)
+        assert not reply.success and "inactive" in reply.message
+        assert client.call("change_state", ChangeState,
+                           transition=Transition(id=Transition.TRANSITION_ACTIVATE)).success
+        status = _diagnostic(client, lambda s: s["state"] == "running" and s["recording"], timeout=60.0)
+        bag = Path(status["recording"])
+        assert bag.parent == tmp_path
+        n = len(client.received("/clock"))
+        client.wait_for("/clock", lambda m: len(m) > n + 10)
+    finally:
+        code = _stop(proc, signal.SIGTERM)
+    assert code == 0, (tmp_path / "node.log").read_text()[-3000:]
+    recording = bag_reader.read(bag)
+    assert recording.complete and recording.result["status"] == "interrupted"
+    assert len(recording.clock) > 10 and recording.metadata["scene_name"] == "collapse_2d"
