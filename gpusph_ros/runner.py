@@ -14,6 +14,7 @@ from importlib.metadata import version
 import numpy as np
 import yaml
 
+from .measure.cloud import CloudPacker
 from .measure.suite import Measurements
 from .ros import messages
 from .ros.recording import BagRecorder, qos_yaml
@@ -37,7 +38,8 @@ class Run:
         self.model = build(scene, **run_config.numerics)
         self.solver = Solver(self.model.config, self.model.particles)
         self.measurements = Measurements(self.solver, self.model)
-        self.cloud = messages.CloudBuilder(self.solver.n, frame_id=frame_id)
+        self.packer = CloudPacker(self.solver)
+        self.cloud = messages.CloudBuilder(self.packer.fields, frame_id=frame_id)
         self.next_output = 0
         self.wall = 0.0
 
@@ -56,8 +58,9 @@ class Run:
     def set_cloud(self, fields=None, frame_id=None):
         """Change the particle cloud's fields or the frame of every message."""
         self.frame_id = frame_id or self.frame_id
-        self.cloud = messages.CloudBuilder(self.solver.n, self.cloud.fields[3:] if fields is None else fields,
-                                           self.frame_id)
+        if fields is not None:
+            self.packer = CloudPacker(self.solver, fields)
+        self.cloud = messages.CloudBuilder(self.packer.fields, self.frame_id)
 
     @property
     def particles_topic(self) -> str:
@@ -93,7 +96,7 @@ class Run:
         out += messages.measurement_messages(t, self.measurements.sample(), self.scene, self.namespace, self.frame_id)
         every = self.output.particle_every
         if every and index % every == 0:
-            out.append((self.particles_topic, self.cloud.build(t, self.solver.snapshot())))
+            out.append((self.particles_topic, self.cloud.build(t, self.packer.pack())))
         return out
 
     def step_output(self, interrupt=None):

@@ -12,10 +12,6 @@ from geometry_msgs.msg import PointStamped, Vector3Stamped, WrenchStamped
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import FluidPressure, PointCloud2, PointField
 
-# the cloud's fields after x, y, z, all float32
-PARTICLE_FIELDS = ("vx", "vy", "vz", "density", "pressure")
-_SOURCE = {"vx": ("vel", 0), "vy": ("vel", 1), "vz": ("vel", 2), "density": ("rho", None), "pressure": ("pressure", None)}
-
 
 def stamp(t: float) -> Time:
     """Simulated time [s] as builtin_interfaces/Time."""
@@ -28,28 +24,19 @@ def clock(t: float) -> Clock:
 
 
 class CloudBuilder:
-    """PointCloud2 messages of a fixed particle count and field list, packed from the solver's
-    arrays by numpy into one reusable float32 buffer (no per-point Python)."""
+    """PointCloud2 messages from packed float32 rows (``measure.cloud.CloudPacker``): the field
+    layout is made once, the data is one copy of the rows' bytes."""
 
-    def __init__(self, n: int, fields=PARTICLE_FIELDS, frame_id: str = "world"):
-        for name in fields:
-            if name not in _SOURCE:
-                raise ValueError(f"particle_fields: {name!r} is not one of {', '.join(PARTICLE_FIELDS)}")
-        self.fields = ("x", "y", "z") + tuple(fields)
+    def __init__(self, fields, frame_id: str = "world"):
+        self.fields = tuple(fields)
         self.frame_id = frame_id
-        self._buffer = np.zeros((n, len(self.fields)), dtype="<f4")
         self._layout = [PointField(name=name, offset=4 * k, datatype=PointField.FLOAT32, count=1)
                         for k, name in enumerate(self.fields)]
 
-    def build(self, t: float, snapshot: dict) -> PointCloud2:
-        buf = self._buffer
-        buf[:, 0:3] = snapshot["pos"]
-        for k, name in enumerate(self.fields[3:], start=3):
-            key, column = _SOURCE[name]
-            buf[:, k] = snapshot[key] if column is None else snapshot[key][:, column]
+    def build(self, t: float, rows: np.ndarray) -> PointCloud2:
+        n, step = rows.shape[0], rows.shape[1] * 4
         data = array.array("B")
-        data.frombytes(buf.data.cast("B"))  # one copy, straight from the packed buffer
-        n, step = buf.shape[0], buf.shape[1] * 4
+        data.frombytes(rows.data.cast("B"))
         msg = PointCloud2(height=1, width=n, fields=self._layout, is_bigendian=False, point_step=step,
                           row_step=step * n, is_dense=True)
         msg.header.stamp = stamp(t)

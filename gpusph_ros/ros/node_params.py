@@ -14,7 +14,7 @@ from pathlib import Path
 from ..scenes.run import resolve
 from ..scenes.schema import builtin_names, load_scene
 from ..sph.config import BOUNDARIES, DENSITY_DIFFUSIONS, KERNELS, PRECISIONS, ConfigError
-from .messages import PARTICLE_FIELDS
+from ..measure.cloud import FIELDS as PARTICLE_FIELDS
 
 # when a change takes effect
 RESET = "reset"  # needs new particles or buffers: at the next ~/reset

@@ -309,10 +309,15 @@ class Solver:
         self.neighbours.overflow.zero_()
 
     # -- state out ------------------------------------------------------------------------
+    def update_pressure(self):
+        """Bring the pressure array up to the current density (the step loop keeps it only where
+        the force passes need it)."""
+        wp.launch(self._eos, dim=self.n, inputs=[self.params, self._fields], device=self.device)
+
     def snapshot(self) -> dict:
         """Host copies of the state in the caller's particle order: pos, vel (n x 3), rho, pressure,
         mass (n), ptype, body (n); with SPS also the stress (sps_tau_diag, sps_tau_off)."""
-        wp.launch(self._eos, dim=self.n, inputs=[self.params, self._fields], device=self.device)
+        self.update_pressure()
         slot_of = np.empty(self.n, dtype=np.int64)
         slot_of[self.ids.numpy()] = np.arange(self.n)  # the inverse permutation, O(n) where a sort is O(n log n)
         arrays = {"pos": self.pos, "vel": self.vel, "rho": self.rho, "pressure": self.pressure, "mass": self.mass}
@@ -328,7 +333,7 @@ class Solver:
     def measurement_view(self):
         """(params, fields, neighbours) with pressure and the cell sort brought up to the current
         state, for measurements that run on the device between steps."""
-        wp.launch(self._eos, dim=self.n, inputs=[self.params, self._fields], device=self.device)
+        self.update_pressure()
         self.neighbours.rebuild(self.pos)
         return self.params, self._fields, self.neighbours
 

@@ -1,0 +1,38 @@
+"""The packed particle rows (gpusph_ros.measure.cloud): the solver's state in scene order, as
+float32, whatever the solver's precision, order of arrays or field choice."""
+import numpy as np
+import pytest
+
+from gpusph_ros.measure.cloud import FIELDS, CloudPacker
+from gpusph_ros.scenes.build import build
+from gpusph_ros.scenes.schema import load_scene
+from gpusph_ros.sph import Solver
+
+
+@pytest.fixture(scope="module", params=["float32", "float64"])
+def solver(request):
+    model = build(load_scene("dambreak1_thesis"), dx=0.06, precision=request.param)
+    s = Solver(model.config, model.particles)
+    s.advance(0.02)  # the arrays have been re-sorted into cell order since the fill
+    return s
+
+
+def test_rows_are_the_snapshot_in_scene_order_as_float32(solver):
+    rows = CloudPacker(solver).pack()
+    snap = solver.snapshot()
+    expected = np.column_stack([snap["pos"], snap["vel"], snap["rho"], snap["pressure"]]).astype(np.float32)
+    assert rows.dtype == np.float32 and rows.shape == (solver.n, 3 + len(FIELDS))
+    assert np.array_equal(rows, expected)
+
+
+def test_a_field_subset_in_the_order_asked(solver):
+    rows = CloudPacker(solver, ["pressure", "vz"]).pack()
+    snap = solver.snapshot()
+    assert np.array_equal(rows[:, 3], snap["pressure"].astype(np.float32))
+    assert np.array_equal(rows[:, 4], snap["vel"][:, 2].astype(np.float32))
+    assert CloudPacker(solver, []).pack().shape == (solver.n, 3)
+
+
+def test_an_unknown_field_is_refused_with_the_choices(solver):
+    with pytest.raises(ValueError, match="'speed' is not one of vx, vy, vz, density, pressure"):
+        CloudPacker(solver, ["speed"])
