@@ -229,6 +229,19 @@ def test_a_paused_node_steps_one_output_and_the_cloud_is_the_scene(client):
     assert not reply.success and "pause it first" in reply.message
 
 
+def test_a_pause_right_after_a_reset_then_a_step_publishes_the_next_output(client):
+    # the pause lands while the solver thread is still publishing the new run's t = 0 output:
+    # the step must still produce the output after it
+    assert client.call("set_paused", SetBool, data=False).success
+    assert client.call("reset", Trigger).success
+    assert client.call("set_paused", SetBool, data=True).success
+    client.clear("/clock")
+    reply = client.call("step", Trigger)
+    assert reply.success and reply.message.startswith("stepped to t = "), reply.message
+    t = float(reply.message.split("t = ")[1].split(" s")[0])
+    assert t in [_t(m.clock) for m in client.wait_for("/clock", lambda ms: any(_t(m.clock) == t for m in ms))]
+
+
 def test_pause_holds_the_simulated_time_and_resume_moves_it(client):
     assert client.call("set_paused", SetBool, data=False).success
     _diagnostic(client, lambda s: s["state"] == "running")

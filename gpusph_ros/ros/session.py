@@ -34,7 +34,8 @@ class Session:
         self.failure = ""  # why the solver stopped; "" while healthy
         self.real_time_factor = 0.0
         self.recorder = None
-        self._steps_wanted = 0
+        self._step_to = -1  # a paused solver still produces outputs up to this index (~/step)
+        self._published = -1  # index of the last output handed to the publishers
         self._busy = self._hold = self._closing = False
         self._pending = {}
         self._pace = None  # (wall, simulated time) the real-time factor counts from
@@ -52,21 +53,24 @@ class Session:
             return "failed"
         if run.done:
             return "finished"
-        if self._steps_wanted:
+        if self._stepping():
             return "stepping"
         if not self.active:
             return "inactive"
         return "paused" if self.paused else "running"
 
+    def _stepping(self) -> bool:
+        return self.run is not None and self.run.next_output <= self._step_to
+
     def _can_advance(self) -> bool:
         run = self.run
         if run is None or self.failure or run.done or self._hold:
             return False
-        return self._steps_wanted > 0 or (self.active and not self.paused)
+        return self._stepping() or (self.active and not self.paused)
 
     def _interrupted(self) -> bool:
         return (self._closing or self._hold or bool(self._pending)
-                or not (self._steps_wanted > 0 or (self.active and not self.paused)))
+                or not (self._stepping() or (self.active and not self.paused)))
 
     def stats(self) -> dict:
         """Figures for /diagnostics; rates over the time since the previous call."""
@@ -129,7 +133,7 @@ class Session:
             msgs = run.step_output(self._interrupted)
         except (HealthError, NeighbourOverflow, RuntimeError) as err:  # RuntimeError: time stuck, device error
             with self._cond:
-                self.failure, self.paused, self._steps_wanted = str(err), True, 0
+                self.failure, self.paused, self._step_to = str(err), True, -1
             self.stop_recording(f"failed: {err}")
             self._report("error", f"the solver stopped at t = {run.solver.time:.4f} s: {err}; the node is paused "
                                   f"and still serving; ~/reset rebuilds the scene")
@@ -139,7 +143,8 @@ class Session:
         t = run.solver.time
         self._emit(msgs, t)
         with self._cond:
-            self._steps_wanted = max(0, self._steps_wanted - 1)
+            self._published = run.next_output - 1
+            self._cond.notify_all()
         if run.done:
             self.stop_recording("completed")
             self._report("info", f"reached end_time = {run.output.end_time:g} s after {run.solver.steps} steps")
@@ -212,16 +217,17 @@ class Session:
                 return False, f"the run is at end_time = {run.output.end_time:g} s; raise end_time or ~/reset"
             if self.active and not self.paused:
                 return False, "the solver is running; pause it first (~/set_paused true)"
-            k = run.next_output + self._steps_wanted
-            self._steps_wanted += 1
+            # the output after those already asked for; run.next_output has already moved past
+            # an output the solver thread is still publishing
+            k = self._step_to = max(run.next_output, self._step_to + 1)
             self._cond.notify_all()
             deadline = time.monotonic() + timeout
-            while run.next_output <= k and not self.failure and run is self.run and time.monotonic() < deadline:
+            while self._published < k and not self.failure and run is self.run and time.monotonic() < deadline:
                 self._cond.wait(max(0.0, deadline - time.monotonic()))
             target = k / run.output.output_rate
             if self.failure:
                 return False, f"the step failed: {self.failure}"
-            if run.next_output <= k:
+            if self._published < k:
                 return True, f"stepping to t = {target:.4f} s (still running after {timeout:g} s; watch /clock)"
             return True, f"stepped to t = {run.solver.time:.4f} s ({run.solver.steps} steps in all)"
 
@@ -242,7 +248,7 @@ class Session:
             raise
         self.stop_recording("reset")
         with self._cond:
-            self.run, self.failure, self._steps_wanted, self._pending = run, "", 0, {}
+            self.run, self.failure, self._step_to, self._published, self._pending = run, "", -1, -1, {}
             self._pace = self._window = None
             self._hold = False
             self._cond.notify_all()
