@@ -26,6 +26,7 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python bench/solver.py
+	$(BIN)/python bench/node.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info

@@ -24,6 +24,7 @@ class Client:
         self._thread.start()
         self.params = AsyncParameterClient(self.node, target)
         self.messages = collections.defaultdict(list)
+        self.arrivals = collections.defaultdict(list)  # time.monotonic() of each message's arrival
         self._lock = threading.Lock()
         self._clients = {}
 
@@ -46,6 +47,7 @@ class Client:
         def keep(msg):
             with self._lock:
                 self.messages[topic].append(msg)
+                self.arrivals[topic].append(time.monotonic())
 
         self.node.create_subscription(msg_type, topic, keep, depth)
 
@@ -56,6 +58,7 @@ class Client:
     def clear(self, topic):
         with self._lock:
             self.messages[topic].clear()
+            self.arrivals[topic].clear()
 
     def wait_for(self, topic, predicate=bool, timeout=60.0) -> list:
         """The messages of ``topic`` once ``predicate(messages)`` holds."""

@@ -166,6 +166,10 @@ def test_the_node_runs_and_reports_itself_on_diagnostics(client):
         assert key in status
     clocks = [_t(m.clock) for m in client.received("/clock")]
     assert clocks == sorted(clocks) and clocks[-1] > 0.0
+    # the cloud's QoS, reliable and depth 1 by default, can be overridden at start-up
+    qos = client.get("qos_overrides./sim_node/particles.publisher.reliability",
+                     "qos_overrides./sim_node/particles.publisher.depth")
+    assert list(qos.values()) == ["reliable", 1]
 
 
 def test_bad_parameters_are_rejected_with_a_reason_and_change_nothing(client):
@@ -305,10 +309,19 @@ def test_recording_toggles_and_reads_back_with_rosbags(client, tmp_path):
     assert client.set(record_dir="")[0].successful
 
 
-def test_an_instability_gives_an_error_diagnostic_and_the_node_still_answers(client):
+def test_an_instability_gives_an_error_diagnostic_and_the_node_still_answers(client, tmp_path):
+    assert client.set(record_dir=str(tmp_path))[0].successful
+    reply = client.call("record", SetBool, data=True)
+    assert reply.success
+    bag = Path(reply.message.split("recording to ", 1)[1])
     assert client.set(c0=0.3)[0].successful  # a sound speed far below 10 sqrt(g H): density runs away
     assert client.call("set_paused", SetBool, data=False).success
     status = _diagnostic(client, lambda s: s["state"] == "failed", timeout=120.0)
+    assert status["recording"] == ""  # the failure finished the bag, which says why
+    recording = bag_reader.read(bag)
+    assert recording.complete and recording.result["status"].startswith("failed: health check")
+    assert len(recording.clock) > 0
+    assert client.set(record_dir="")[0].successful
     assert status["level"] == DiagnosticStatus.ERROR
     assert "health check" in status["message"] and "failed" in status["message"]
     assert client.get("c0") == {"c0": 0.3}  # still answering
@@ -368,6 +381,14 @@ def test_lifecycle_mode_without_autostart_and_sigterm_finishes_the_recording(nod
         assert bag.parent == tmp_path
         n = len(client.received("/clock"))
         client.wait_for("/clock", lambda m: len(m) > n + 10)
+        # at most 0.01 simulated s per wall s: the 10 ms outputs come once a second (the solver
+        # needs about 0.3 s for one on this CPU)
+        assert client.set(real_time_factor=0.01)[0].successful
+        time.sleep(1.5)
+        client.clear("/clock")
+        client.wait_for("/clock", lambda m: len(m) >= 4)
+        arrivals = np.diff(client.arrivals["/clock"][:4])
+        assert abs(arrivals.mean() - 1.0) < 0.15, arrivals
     finally:
         code = _stop(proc, signal.SIGTERM)
     assert code == 0, (tmp_path / "node.log").read_text()[-3000:]
