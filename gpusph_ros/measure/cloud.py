@@ -68,7 +68,6 @@ class CloudPacker:
         # on every core of a CPU (the solver's launcher): a memory-bound scatter of 32 B a particle
         s.launch(self._pack, s.n, [s.ids, s.pos, s.vel, s.rho, s.pressure, self._codes, self._rows])
         if self._host is not self._rows:
-            wp.copy(self._host, self._rows)
-        else:
-            wp.synchronize_device(s.device)
+            wp.copy(self._host, self._rows)  # into pinned memory: asynchronous until the sync below
+        wp.synchronize_device(s.device)
         return self._host.numpy()
