@@ -37,6 +37,7 @@ setup(
             'sim_node = gpusph_ros.ros.sim_node:main',
             'gpusph-run = gpusph_ros.cli:run_main',
             'gpusph-analyze = gpusph_ros.cli:analyze_main',
+            'gpusph-sweep = gpusph_ros.cli:sweep_main',
         ],
     },
 )

@@ -1,9 +1,10 @@
 """Headless entry points.
 
     gpusph-run SCENE [--run-config NAME|FILE ...] [--set key=value ...] --out DIR
-    gpusph-analyze DIR [--charts DIR] [--shared DIR]
+    gpusph-analyze DIR [--charts DIR] [--shared DIR]     (a recording, or a study's results folder)
+    gpusph-sweep STUDY [--scheduler ADDRESS] [--out DIR]
 
-(also ``python -m gpusph_ros.cli run|analyze ...``). SCENE is a built-in scene name or a YAML
+(also ``python -m gpusph_ros.cli run|analyze|sweep ...``). SCENE is a built-in scene name or a YAML
 file; run settings layer as scenes.run describes. Exit status: 0 done, 2 the run failed a
 health check or was interrupted (its recording is closed and readable), 1 bad input.
 """
@@ -87,6 +88,8 @@ def analyze_main(argv=None):
 
     from .analysis import report as R
 
+    if (Path(args.recording) / "results.csv").is_file():
+        return _analyze_study(Path(args.recording))
     try:
         rep, curves = R.analyse(args.recording, Path(args.shared) if args.shared else None)
     except (FileNotFoundError, KeyError) as err:
@@ -102,11 +105,59 @@ def analyze_main(argv=None):
     return 0
 
 
+def _analyze_study(folder) -> int:
+    import json
+
+    from .study import table
+
+    rows = table.read(folder / "results.csv")
+    metrics = json.loads((folder / "study.json").read_text())["metrics"]
+    print(table.thesis_tables(rows, metrics))
+    print("\n" + table.headline(rows, metrics))
+    return 0
+
+
+def sweep_main(argv=None):
+    parser = argparse.ArgumentParser(prog="gpusph-sweep", description="Run a study's cases on Dask, tabulate and chart them.")
+    parser.add_argument("study", help="a study in config/studies or a path to a study YAML file")
+    parser.add_argument("--scheduler", help="address of a running Dask scheduler (default: a local cluster)")
+    parser.add_argument("--out", help="results folder (default: the study's `out`)")
+    args = parser.parse_args(argv)
+    import json
+    from pathlib import Path
+
+    import warp as wp
+
+    wp.config.log_level = wp.LOG_WARNING
+    from .analysis.reference import shared_dir
+    from .sph import ConfigError
+    from .study import charts, table
+    from .study.schema import load_study, with_out
+    from .study.sweep import sweep
+
+    try:
+        study = load_study(args.study)
+    except ConfigError as err:
+        print(f"gpusph-sweep: {err}", file=sys.stderr)
+        return 1
+    if args.out:
+        study = with_out(study, args.out)
+    study.out.mkdir(parents=True, exist_ok=True)
+    (study.out / "study.json").write_text(json.dumps({"name": study.name, "metrics": study.metrics,
+                                                      "cases": [c.name for c in study.cases()]}, indent=1))
+    rows = sweep(study, scheduler=args.scheduler, progress=lambda line: print(line, flush=True))
+    written = table.write(rows, study.out) + charts.write(rows, study.metrics, study.out / "charts", shared_dir())
+    print(table.thesis_tables(rows, study.metrics))
+    print("\n" + table.headline(rows, study.metrics))
+    print("".join(f"\nwrote {w}" for w in written))
+    return 0
+
+
 def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
-    commands = {"run": run_main, "analyze": analyze_main}
+    commands = {"run": run_main, "analyze": analyze_main, "sweep": sweep_main}
     if not argv or argv[0] not in commands:
-        print("usage: python -m gpusph_ros.cli {run,analyze} ...", file=sys.stderr)
+        print("usage: python -m gpusph_ros.cli {run,analyze,sweep} ...", file=sys.stderr)
         return 1
     return commands[argv[0]](argv[1:])
 

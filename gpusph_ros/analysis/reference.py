@@ -88,3 +88,11 @@ def gpusph_profile(shared, scenario, dx):
     if not rows:
         return None
     return (np.array([float(r["height_mm"]) / 1000 for r in rows]), np.array([float(r["normalized_velocity"]) for r in rows]))
+
+
+def gpusph_series(shared, table: str, column: str, scenario: int):
+    """(dx, value) arrays of every GPUSPH run of ``scenario`` in ``table`` (thesis order: fine to coarse)."""
+    if shared is None or scenario is None:
+        return np.array([]), np.array([])
+    rows = [r for r in _rows(shared, table) if int(r["scenario"]) == scenario]
+    return np.array([float(r["dx_m"]) for r in rows]), np.array([float(r[column]) for r in rows])

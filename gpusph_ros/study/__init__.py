@@ -1,0 +1,1 @@
+"""Convergence studies: study files, cases run on Dask, the results table and its charts."""

@@ -1,0 +1,78 @@
+"""The results table and the charts drawn from it (gpusph_ros.study.table, .charts), on a fixture
+table with known answers: the series each chart holds, the Pareto front, the headline."""
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+
+from gpusph_ros.study import charts, table
+
+
+def _row(scenario, dx, err, wall, gpusph_scenario, status="completed"):
+    return {"case": f"dambreak1_thesis-{scenario}-dx={dx:g}", "scene": "dambreak1_thesis", "scenario": scenario,
+            "dx": dx, "status": status, "particles": int(1000 / dx), "steps": 1000, "wall_time_s": wall,
+            "particle_steps": int(1000 / dx) * 1000, "gpusph_scenario": gpusph_scenario,
+            "peak_velocity": 2.21 * (1 + err / 100), "peak_velocity_experiment": 2.21,
+            "peak_velocity_error_pct": err, "peak_velocity_gpusph": None, "peak_velocity_gpusph_error_pct": None,
+            "velocity_rms": abs(err) / 100}
+
+
+ROWS = [_row("s1", 0.03, -30.0, 100.0, 1), _row("s1", 0.02, -12.0, 400.0, 1), _row("s1", 0.015, -5.0, 1200.0, 1),
+        _row("s3", 0.03, 8.0, 150.0, 3), _row("s3", 0.02, 20.0, 500.0, 3),
+        _row("s3", 0.015, 0.0, 50.0, 3, status="failed: health check 'density_bounds' failed")]
+
+
+def test_pareto_front_and_the_cheapest_within_ten_percent():
+    points = [(r["wall_time_s"], *table.error_of(r, "peak_velocity"), r) for r in ROWS
+              if table.error_of(r, "peak_velocity")[0] is not None]
+    front = table.pareto([(c, e, r["case"]) for c, e, _, r in points])
+    assert [(c, e) for c, e, _ in front] == [(100.0, 30.0), (150.0, 8.0), (1200.0, 5.0)]
+    best = table.cheapest_within(ROWS, "peak_velocity", 10.0)
+    assert best["case"] == "dambreak1_thesis-s3-dx=0.03"  # the failed case's 0% does not count
+    assert "cheapest within 10%: dambreak1_thesis-s3-dx=0.03" in table.headline(ROWS, ["peak_velocity"])
+
+
+def test_csv_and_parquet_hold_every_row_and_column(tmp_path):
+    csv_path, parquet_path = table.write(ROWS, tmp_path)
+    back = table.read(csv_path)
+    assert [r["case"] for r in back] == [r["case"] for r in ROWS]
+    assert back[1]["peak_velocity_error_pct"] == -12.0 and back[0]["peak_velocity_gpusph"] is None
+    pt = pq.read_table(parquet_path)
+    assert pt.num_rows == 6 and set(pt.column_names) == set(table.columns(ROWS))
+    assert pt.column("wall_time_s").to_pylist() == [r["wall_time_s"] for r in ROWS]
+
+
+def test_error_against_dx_has_ours_and_gpusphs_series_per_scenario(shared_dir):
+    fig = charts.error_vs_dx(ROWS, "peak_velocity", shared_dir)
+    lines = {line.get_label(): line for line in fig.axes[0].get_lines()}
+    assert set(lines) == {"ours: dambreak1_thesis, s1", "ours: dambreak1_thesis, s3", "GPUSPH (thesis scenario 1)",
+                          "GPUSPH (thesis scenario 3)"}
+    ours = lines["ours: dambreak1_thesis, s1"]
+    assert list(ours.get_xdata()) == [15.0, 20.0, 30.0] and list(ours.get_ydata()) == [5.0, 12.0, 30.0]
+    assert list(lines["ours: dambreak1_thesis, s3"].get_xdata()) == [20.0, 30.0]  # the failed case is left out
+    gp = lines["GPUSPH (thesis scenario 1)"]
+    assert len(gp.get_xdata()) == 18 and min(gp.get_xdata()) == pytest.approx(3.5)
+    assert gp.get_ydata()[0] == pytest.approx(0.73)  # thesis Table 6: 2.23 m/s, +0.73% at 3.5 mm
+    assert "dx [mm]" in fig.axes[0].get_xlabel() and "[%]" in fig.axes[0].get_ylabel()
+
+
+@pytest.mark.parametrize("cost", ["wall_time_s", "particle_steps"])
+def test_error_against_cost_marks_the_pareto_front(cost):
+    fig = charts.error_vs_cost(ROWS, "peak_velocity", cost)
+    lines = {line.get_label(): line for line in fig.axes[0].get_lines()}
+    assert {"dambreak1_thesis, s1", "dambreak1_thesis, s3", "Pareto front"} == set(lines)
+    front = lines["Pareto front"]
+    costs = sorted((r[cost], abs(r["peak_velocity_error_pct"])) for r in ROWS if r["status"] == "completed")
+    best, expected = np.inf, []
+    for c, e in costs:
+        if e < best:
+            expected.append((c, e))
+            best = e
+    assert list(zip(front.get_xdata(), front.get_ydata())) == expected
+    assert fig.axes[0].get_xscale() == "log" and fig.axes[0].get_title()
+
+
+def test_no_chart_without_an_error_measure(tmp_path):
+    assert charts.error_vs_dx(ROWS, "D_return_time") is None
+    paths = charts.write(ROWS, ["peak_velocity", "D_return_time"], tmp_path)
+    assert sorted(p.name for p in paths) == ["peak_velocity_vs_dx.png", "peak_velocity_vs_particle_steps.png",
+                                             "peak_velocity_vs_wall_time_s.png"]
