@@ -50,7 +50,7 @@ def test_a_four_case_study_with_a_failing_case_completes_and_is_tabulated(cluste
         assert r["device"] == "cpu" and r["precision"] == "float32"
         assert (tmp_path / "out/cases" / r["case"] / "bag/metadata.yaml").is_file()
     written = table.write(rows, study.out) + charts.write(rows, study.metrics, study.out / "charts", shared_dir)
-    assert all(p.is_file() for p in written) and len(written) == 2 + 3 * 2  # RMS and peaks, no D metrics asked
+    assert all(p.is_file() for p in written) and len(written) == 2 + 3 * 3  # a table twice, 3 charts a metric
     # a rerun runs nothing: every case has finished (completed or failed)
     lines.clear()
     with Client(cluster) as client:
