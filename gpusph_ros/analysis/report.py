@@ -160,7 +160,8 @@ def analyse(path, shared=None) -> dict:
     return report, curves
 
 
-def _fmt(value, err=None):
+def fmt(value, err=None):
+    """A value to three figures, its percent error in brackets; "-" for none."""
     if value is None or (isinstance(value, float) and not np.isfinite(value)):
         return "-"
     text = f"{value:.3g}" if abs(value) < 100 else f"{value:.1f}"
@@ -188,8 +189,8 @@ def table(report) -> str:
                        "and are not comparable with a finished run")
     rows = [("metric", "unit", "experiment", "GPUSPH (thesis)", "this run")]
     for m in report["metrics"]:
-        rows.append((m["label"], m["unit"], _fmt(m["experiment"]), _fmt(m["gpusph"], m.get("gpusph_error_pct")),
-                     _fmt(m["value"], m.get("error_pct")) + (f"  [{m['note']}]" if m["note"] else "")))
+        rows.append((m["label"], m["unit"], fmt(m["experiment"]), fmt(m["gpusph"], m.get("gpusph_error_pct")),
+                     fmt(m["value"], m.get("error_pct")) + (f"  [{m['note']}]" if m["note"] else "")))
     widths = [max(len(r[k]) for r in rows) for k in range(4)]
     lines = ["  ".join(r[k].ljust(widths[k]) for k in range(4)) + "  " + r[4] for r in rows]
     return "\n".join(head + lines)

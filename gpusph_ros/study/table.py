@@ -1,6 +1,7 @@
 """A study's results table (CSV and Parquet), each metric's error measure, and the headline: the
 cheapest setting within a tolerance of the experiment."""
 import csv
+import re
 from pathlib import Path
 
 
@@ -83,46 +84,36 @@ def cheapest_within(rows, metric, tolerance_pct=10.0, cost="wall_time_s"):
     return min(ok, key=lambda r: r[cost]) if ok else None
 
 
-def _cell(value, pct=None):
-    if value is None:
-        return "-"
-    text = f"{value:.3g}" if abs(value) < 100 else f"{value:.1f}"
-    return text + (f" ({pct:+.1f}%)" if pct is not None else "")
+def short_status(status: str) -> str:
+    """``failed: density_bounds at t = 0.35 s`` for a health-check failure; the status otherwise."""
+    found = re.search(r"health check '(\w+)' failed at step \d+ \(t = ([\d.e+-]+) s\)", status or "")
+    return f"failed: {found[1]} at t = {float(found[2]):.3g} s" if found else (status or "?")
 
 
 def thesis_tables(rows, metrics) -> str:
-    """Per metric and scene, the thesis's layout: a line per dx, per scenario ours beside
-    GPUSPH's at the same dx and scenario (percent error against the experiment in brackets);
-    wall time and status of ours."""
-    from ..analysis.report import LABELS
+    """Per metric and scene, the thesis's comparison: a line per scenario and dx with ours beside
+    GPUSPH's at the same dx and scenario (percent error against the experiment in brackets), our
+    wall time, and how a run that did not complete ended."""
+    from ..analysis.report import LABELS, fmt
 
     out = []
-    scenes = list(dict.fromkeys(r["scene"] for r in rows))
-    scenarios = list(dict.fromkeys(r["scenario"] for r in rows))
     for metric in metrics:
         label, unit = LABELS.get(metric, (metric, ""))
-        for scene in scenes:
+        for scene in dict.fromkeys(r["scene"] for r in rows):
             mine = [r for r in rows if r["scene"] == scene]
             exp = next((r.get(f"{metric}_experiment") for r in mine if r.get(f"{metric}_experiment") is not None),
                        None)
             out.append(f"\n{label} [{unit}], {scene}" + (f"; experiment {exp:.3g}" if exp is not None else ""))
-            head = ["dx [mm]"] + [f"{s}: ours | GPUSPH | wall [s]" for s in scenarios]
-            lines = [head]
-            for dx in sorted({r["dx"] for r in mine if r.get("dx") is not None}):
-                line = [f"{dx * 1000:g}"]
-                for s in scenarios:
-                    r = next((r for r in mine if r["scenario"] == s and r.get("dx") == dx), None)
-                    if r is None:
-                        line.append("")
-                    elif r.get("status") != "completed":
-                        line.append(f"{r.get('status', '?')[:40]}")
-                    else:
-                        line.append(f"{_cell(r.get(metric), r.get(f'{metric}_error_pct'))} | "
-                                    f"{_cell(r.get(f'{metric}_gpusph'), r.get(f'{metric}_gpusph_error_pct'))} | "
-                                    f"{_cell(r.get('wall_time_s'))}")
-                lines.append(line)
-            widths = [max(len(l[k]) for l in lines) for k in range(len(head))]
-            out += ["  ".join(c.ljust(w) for c, w in zip(l, widths)) for l in lines]
+            lines = [("scenario", "dx [mm]", "ours", "GPUSPH (thesis)", "wall [s]", "status")]
+            for r in sorted(mine, key=lambda r: (list(dict.fromkeys(x["scenario"] for x in mine)).index(r["scenario"]),
+                                                 r.get("dx") or 0.0)):
+                done = r.get("status") == "completed"
+                lines.append((r["scenario"], f"{(r.get('dx') or 0.0) * 1000:g}",
+                              fmt(r.get(metric), r.get(f"{metric}_error_pct")) if done else "-",
+                              fmt(r.get(f"{metric}_gpusph"), r.get(f"{metric}_gpusph_error_pct")),
+                              fmt(r.get("wall_time_s")), short_status(r.get("status"))))
+            widths = [max(len(line[k]) for line in lines) for k in range(6)]
+            out += ["  ".join(c.ljust(w) for c, w in zip(line, widths)).rstrip() for line in lines]
     return "\n".join(out).lstrip("\n")
 
 
