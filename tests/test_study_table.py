@@ -76,3 +76,21 @@ def test_no_chart_without_an_error_measure(tmp_path):
     paths = charts.write(ROWS, ["peak_velocity", "D_return_time"], tmp_path)
     assert sorted(p.name for p in paths) == ["peak_velocity_vs_dx.png", "peak_velocity_vs_particle_steps.png",
                                              "peak_velocity_vs_wall_time_s.png"]
+
+
+def test_gpusph_analyze_on_a_study_folder_prints_the_thesis_style_tables(tmp_path, capsys):
+    import json
+
+    from gpusph_ros.cli import analyze_main
+
+    table.write(ROWS, tmp_path)
+    (tmp_path / "study.json").write_text(json.dumps({"name": "fixture", "metrics": ["peak_velocity"]}))
+    assert analyze_main([str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "peak x-velocity at the probe [m/s], dambreak1_thesis; experiment 2.21" in out
+    lines = out.splitlines()
+    assert lines[1].split() == ["scenario", "dx", "[mm]", "ours", "GPUSPH", "(thesis)", "wall", "[s]", "status"]
+    assert lines[3].split()[:5] == ["s1", "20", "1.94", "(-12.0%)", "-"]  # 2.21 x (1 - 12%)
+    failed = next(line for line in lines if line.startswith("s3") and " 15 " in line)
+    assert "health check 'density_bounds' failed" in failed and "(" not in failed.split()[2]
+    assert "cheapest within 10%: dambreak1_thesis-s3-dx=0.03 (2.39, +8.0%) in 150 s" in out
