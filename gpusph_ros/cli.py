@@ -108,12 +108,15 @@ def analyze_main(argv=None):
 def _analyze_study(folder) -> int:
     import json
 
-    from .study import table
+    from .analysis.reference import shared_dir
+    from .study import charts, table
 
     rows = table.read(folder / "results.csv")
     metrics = json.loads((folder / "study.json").read_text())["metrics"]
     print(table.thesis_tables(rows, metrics))
     print("\n" + table.headline(rows, metrics))
+    written = charts.write(rows, metrics, folder / "charts", shared_dir())
+    print("".join(f"\nchart: {w}" for w in written))
     return 0
 
 

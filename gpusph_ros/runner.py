@@ -105,12 +105,14 @@ class Run:
         k = self.next_output
         target = k / self.output.output_rate
         start = time.perf_counter()
-        self.solver.advance(target, interrupt)
-        msgs = None
-        if self.solver.reached(target):
-            msgs = self.output_messages(k)
-            self.next_output += 1
-        self.wall += time.perf_counter() - start
+        try:
+            self.solver.advance(target, interrupt)
+            msgs = None
+            if self.solver.reached(target):
+                msgs = self.output_messages(k)
+                self.next_output += 1
+        finally:  # a failed output's steps count in the wall time too (MIPPS of a failed run)
+            self.wall += time.perf_counter() - start
         return msgs
 
     @property

@@ -79,7 +79,8 @@ def error_vs_cost(rows, metric, cost="wall_time_s"):
     front = pareto([(c, e, r) for c, e, _, r in points])
     ax.plot([p[0] for p in front], [p[1] for p in front], "k-", drawstyle="steps-post", lw=1.2, label="Pareto front")
     for c, e, r in front:
-        ax.annotate(f"dx {r['dx'] * 1000:g} mm", (c, e), textcoords="offset points", xytext=(4, 4), fontsize=7)
+        ax.annotate(f"{r['scenario']}, {r['dx'] * 1000:g} mm", (c, e), textcoords="offset points", xytext=(4, 4),
+                    fontsize=7)
     label, unit = LABELS.get(metric, (metric, ""))
     ylabel = points[0][2]
     ax.set_xscale("log")
