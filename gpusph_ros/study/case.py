@@ -6,6 +6,7 @@ row. A run that fails a health check, or a case that cannot be built, is a row w
 not an exception: the study goes on.
 """
 import json
+import shutil
 import time
 from pathlib import Path
 
@@ -68,8 +69,6 @@ def run_case(case: dict, out: str, metrics: list, cpu_threads: int = 0, device: 
     folder = case_dir(out, case["name"])
     bag = folder / "bag"
     if bag.exists():  # a half-written bag of a run that was killed: start the case again
-        import shutil
-
         shutil.rmtree(bag)
     folder.mkdir(parents=True, exist_ok=True)
     settings = dict(case["settings"])
