@@ -38,6 +38,7 @@ setup(
             'gpusph-run = gpusph_ros.cli:run_main',
             'gpusph-analyze = gpusph_ros.cli:analyze_main',
             'gpusph-sweep = gpusph_ros.cli:sweep_main',
+            'gpusph-plan = gpusph_ros.cli:plan_main',
         ],
     },
 )

@@ -3,8 +3,9 @@
     gpusph-run SCENE [--run-config NAME|FILE ...] [--set key=value ...] --out DIR
     gpusph-analyze DIR [--charts DIR] [--shared DIR]     (a recording, or a study's results folder)
     gpusph-sweep STUDY [--scheduler ADDRESS] [--out DIR]
+    gpusph-plan SCENE [--run-config NAME|FILE ...] [--set key=value ...]
 
-(also ``python -m gpusph_ros.cli run|analyze|sweep ...``). SCENE is a built-in scene name or a YAML
+(also ``python -m gpusph_ros.cli run|analyze|sweep|plan ...``). SCENE is a built-in scene name or a YAML
 file; run settings layer as scenes.run describes. Exit status: 0 done, 2 the run failed a
 health check or was interrupted (its recording is closed and readable), 1 bad input.
 """
@@ -156,11 +157,37 @@ def sweep_main(argv=None):
     return 0
 
 
+def plan_main(argv=None):
+    parser = argparse.ArgumentParser(prog="gpusph-plan", description="Particles, device memory, steps and wall time "
+                                     "of a run, from a short calibration run on its device.")
+    parser.add_argument("scene", help="built-in scene name or path to a scene YAML file")
+    parser.add_argument("--run-config", action="append", default=[], metavar="NAME|FILE")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    parser.add_argument("--calibration-steps", type=int, default=30)
+    args = parser.parse_args(argv)
+    import warp as wp
+
+    wp.config.log_level = wp.LOG_WARNING
+    from .plan import plan, text
+    from .scenes.run import resolve
+    from .scenes.schema import load_scene
+    from .sph import ConfigError
+
+    try:
+        scene = load_scene(args.scene)
+        config = resolve(scene, files=args.run_config, sets=args.set)
+    except (ConfigError, ValueError) as err:
+        print(f"gpusph-plan: {err}", file=sys.stderr)
+        return 1
+    print(text(plan(scene, config, args.calibration_steps)))
+    return 0
+
+
 def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
-    commands = {"run": run_main, "analyze": analyze_main, "sweep": sweep_main}
+    commands = {"run": run_main, "analyze": analyze_main, "sweep": sweep_main, "plan": plan_main}
     if not argv or argv[0] not in commands:
-        print("usage: python -m gpusph_ros.cli {run,analyze,sweep} ...", file=sys.stderr)
+        print("usage: python -m gpusph_ros.cli {run,analyze,sweep,plan} ...", file=sys.stderr)
         return 1
     return commands[argv[0]](argv[1:])
 

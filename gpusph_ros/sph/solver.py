@@ -337,6 +337,29 @@ class Solver:
         self.neighbours.rebuild(self.pos)
         return self.params, self._fields, self.neighbours
 
+    def device_bytes(self) -> int:
+        """Bytes of every array this solver holds on its device: state, half-step and candidate
+        copies, scratch, the cell sort and the neighbour lists."""
+        seen, total = set(), 0
+
+        def arrays(value):
+            if isinstance(value, (list, tuple)):
+                for item in value:
+                    yield from arrays(item)
+            elif isinstance(value, wp.array):
+                yield value
+            elif hasattr(value, "_cls"):  # a Warp struct instance: its array members
+                for name in getattr(value._cls, "vars", {}):
+                    yield from arrays(getattr(value, name))
+
+        for owner in (self, self.neighbours):
+            for value in vars(owner).values():
+                for a in arrays(value):
+                    if a.ptr is not None and a.ptr not in seen:
+                        seen.add(a.ptr)
+                        total += a.capacity
+        return total
+
     def mean_neighbours(self) -> float:
         """Mean neighbour-list length of the fluid particles (list radius 1.1 x 2h), freshly built."""
         self.neighbours.rebuild(self.pos, force=True)
