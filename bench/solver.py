@@ -42,7 +42,7 @@ def measure(dx: float, precision: str, device: str, seconds: float, start_time: 
     builds = int(solver.neighbours.builds.numpy()[0]) - builds0
     return {
         "device": str(solver.device), "precision": precision, "dx": dx, "particles": solver.n,
-        "fluid": int((model.particles.ptype == 0).sum()), "neighbours": neighbours, "steps": steps, "wall": wall,
+        "fluid": model.fluid_particles, "neighbours": neighbours, "steps": steps, "wall": wall,
         "steps_per_s": rate, "mipps": solver.n * rate / 1e6,
         "interactions_per_s": listed * FORCE_PASSES_PER_STEP * rate, "sim_time": solver.time,
         "rebuilds": builds / max(steps, 1),

@@ -63,11 +63,7 @@ def run_main(argv=None):
     except (ConfigError, FileExistsError, ValueError) as err:
         print(f"gpusph-run: {err}", file=sys.stderr)
         return 1
-    cfg = run.model.config
-    fluid = int((run.model.particles.ptype == 0).sum())
-    print(f"{scene.name}: dx = {cfg.dx:g} m, {run.solver.n:,} particles ({fluid:,} fluid), {cfg.kernel} kernel, "
-          f"{cfg.viscosity} viscosity, {cfg.boundary} boundaries, {cfg.precision} on {run.solver.device}; "
-          f"to t = {run.output.end_time:g} s, outputs at {run.output.output_rate:g} Hz -> {args.out}", flush=True)
+    print(f"{run.summary()} -> {args.out}", flush=True)
     signal.signal(signal.SIGTERM, _sigterm)
     start = time.perf_counter()
     result = run.execute(recorder, progress=None if args.quiet else _progress)

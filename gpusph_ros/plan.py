@@ -32,7 +32,7 @@ def plan(scene, run_config, calibration_steps: int = 30) -> dict:
     end = run_config.output.end_time
     return {"scene": scene.name, "dx": model.config.dx, "kernel": model.config.kernel,
             "precision": model.config.precision, "device": str(solver.device), "particles": solver.n,
-            "fluid_particles": int((model.particles.ptype == 0).sum()), "device_bytes": solver.device_bytes(),
+            "fluid_particles": model.fluid_particles, "device_bytes": solver.device_bytes(),
             "calibration_steps": steps, "calibration_wall_s": wall, "dt": dt, "steps_per_s": rate,
             "mipps": solver.n * rate / 1e6, "end_time": end, "steps": int(round(end / dt)),
             "wall_s": end / dt / rate}

@@ -62,6 +62,14 @@ class Run:
             self.packer = CloudPacker(self.solver, fields)
         self.cloud = messages.CloudBuilder(self.packer.fields, self.frame_id)
 
+    def summary(self) -> str:
+        """One line on the run: scene, spacing, particles, numerics, device, end time, output rate."""
+        cfg = self.model.config
+        return (f"{self.scene.name}: dx = {cfg.dx:g} m, {self.solver.n} particles ({self.model.fluid_particles} fluid), "
+                f"{cfg.kernel} kernel, {cfg.viscosity} viscosity, {cfg.boundary} boundaries, {cfg.density_diffusion} "
+                f"density diffusion, {cfg.precision} on {self.solver.device}; to t = {self.output.end_time:g} s, "
+                f"outputs at {self.output.output_rate:g} Hz")
+
     @property
     def particles_topic(self) -> str:
         return f"{self.namespace}/particles"
@@ -69,13 +77,12 @@ class Run:
     def describe(self) -> dict:
         """What a recording's metadata says about this run."""
         cfg, solver = self.model.config, self.solver
-        fluid = int((self.model.particles.ptype == 0).sum())
         return {
             "scene_name": self.scene.name, "scene": self.scene.text,
             "run_config": yaml.safe_dump(self.run_config.as_dict(), sort_keys=True),
             "dx": cfg.dx, "kernel": cfg.kernel, "viscosity": cfg.viscosity, "boundary": cfg.boundary,
             "precision": cfg.precision, "device": str(solver.device), "particles": solver.n,
-            "fluid_particles": fluid, "particles_order": "fluid first, then boundary",
+            "fluid_particles": self.model.fluid_particles, "particles_order": "fluid first, then boundary",
             "bodies": yaml.safe_dump(self.model.bodies), "namespace": self.namespace, "frame_id": self.frame_id,
             "versions": yaml.safe_dump({"gpusph_ros": version("gpusph_ros"), "warp": version("warp-lang"),
                                         "numpy": np.__version__, "python": platform.python_version()}),

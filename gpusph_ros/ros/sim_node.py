@@ -157,12 +157,7 @@ class SimNode(LifecycleNode):
         run = self.session.replace(self._build)
         self.session.real_time_factor = self.value("real_time_factor")
         self.awaiting_reset.clear()
-        cfg = run.model.config
-        fluid = int((run.model.particles.ptype == 0).sum())
-        text = (f"{run.scene.name}: dx = {cfg.dx:g} m, {run.solver.n} particles ({fluid} fluid), {cfg.kernel} kernel, "
-                f"{cfg.viscosity} viscosity, {cfg.boundary} boundaries, {cfg.density_diffusion} density diffusion, "
-                f"{cfg.precision} on {run.solver.device}; to t = {run.output.end_time:g} s, outputs at "
-                f"{run.output.output_rate:g} Hz")
+        text = run.summary()
         self.get_logger().info(text)
         return text
 

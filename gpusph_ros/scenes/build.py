@@ -25,6 +25,10 @@ class Model:
     particles: Particles
     bodies: dict
 
+    @property
+    def fluid_particles(self) -> int:
+        return int((self.particles.ptype == FLUID).sum())
+
 
 def _inside(pts, lo, hi, dim):
     return np.all((pts[:, :dim] >= np.asarray(lo[:dim])) & (pts[:, :dim] <= np.asarray(hi[:dim])), axis=1)

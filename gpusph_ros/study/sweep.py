@@ -21,7 +21,7 @@ def _local_cluster(study, device: str):
     gpus = wp.get_cuda_device_count() if device.startswith("cuda") else 0
     workers = study.workers or gpus or os.cpu_count() or 1
     cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
-    return cluster, workers, gpus
+    return cluster, gpus
 
 
 def sweep(study, scheduler=None, client=None, progress=print) -> list:
@@ -38,7 +38,7 @@ def sweep(study, scheduler=None, client=None, progress=print) -> list:
         if scheduler:
             own_client = client = Client(scheduler)
         else:
-            cluster, _, gpus = _local_cluster(study, device)
+            cluster, gpus = _local_cluster(study, device)
             own_client = client = Client(cluster)
     try:
         workers = max(1, len(client.scheduler_info()["workers"]))
