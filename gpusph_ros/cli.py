@@ -3,7 +3,7 @@
     gpusph-run SCENE [--run-config NAME|FILE ...] [--set key=value ...] --out DIR
     gpusph-analyze DIR [--charts DIR] [--shared DIR]     (a recording, or a study's results folder)
     gpusph-sweep STUDY [--scheduler ADDRESS] [--out DIR]
-    gpusph-plan SCENE [--run-config NAME|FILE ...] [--set key=value ...]
+    gpusph-plan SCENE [--run-config NAME|FILE ...] [--set key=value ...] [--no-reductions]
 
 (also ``python -m gpusph_ros.cli run|analyze|sweep|plan ...``). SCENE is a built-in scene name or a YAML
 file; run settings layer as scenes.run describes. Exit status: 0 done, 2 the run failed a
@@ -160,11 +160,13 @@ def plan_main(argv=None):
     parser.add_argument("--run-config", action="append", default=[], metavar="NAME|FILE")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     parser.add_argument("--calibration-steps", type=int, default=30)
+    parser.add_argument("--no-reductions", action="store_true",
+                        help="price only the run as configured, not each scene reduction that applies")
     args = parser.parse_args(argv)
     import warp as wp
 
     wp.config.log_level = wp.LOG_WARNING
-    from .plan import plan, text
+    from .plan import plan, plan_reductions, table, text
     from .scenes.run import resolve
     from .scenes.schema import load_scene
     from .sph import ConfigError
@@ -175,7 +177,13 @@ def plan_main(argv=None):
     except (ConfigError, ValueError) as err:
         print(f"gpusph-plan: {err}", file=sys.stderr)
         return 1
-    print(text(plan(scene, config, args.calibration_steps)))
+    if args.no_reductions:
+        print(text(plan(scene, config, args.calibration_steps)))
+        return 0
+    plans, skipped = plan_reductions(scene, config, args.calibration_steps)
+    print(text(plans[0]))
+    print("\nthe same run under each reduction of the scene (cost: estimated wall time, share of the first):")
+    print(table(plans, skipped))
     return 0
 
 

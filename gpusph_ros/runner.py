@@ -18,7 +18,7 @@ from .measure.cloud import CloudPacker
 from .measure.suite import Measurements
 from .ros import messages
 from .ros.recording import BagRecorder, qos_yaml
-from .scenes.build import build
+from .scenes.build import build_run
 from .sph import HealthError, NeighbourOverflow, Solver
 
 NAMESPACE = "/sim_node"
@@ -35,7 +35,7 @@ class Run:
         self.scene, self.run_config = scene, run_config
         self.output = run_config.output
         self.namespace, self.frame_id = namespace, frame_id
-        self.model = build(scene, **run_config.numerics)
+        self.model = build_run(scene, run_config)
         self.solver = Solver(self.model.config, self.model.particles)
         self.measurements = Measurements(self.solver, self.model)
         self.packer = CloudPacker(self.solver)
@@ -65,7 +65,8 @@ class Run:
     def summary(self) -> str:
         """One line on the run: scene, spacing, particles, numerics, device, end time, output rate."""
         cfg = self.model.config
-        return (f"{self.scene.name}: dx = {cfg.dx:g} m, {self.solver.n} particles ({self.model.fluid_particles} fluid), "
+        model = "" if self.run_config.reduction.label == "full" else f" ({self.run_config.reduction.label})"
+        return (f"{self.scene.name}{model}: dx = {cfg.dx:g} m, {self.solver.n} particles ({self.model.fluid_particles} fluid), "
                 f"{cfg.kernel} kernel, {cfg.viscosity} viscosity, {cfg.boundary} boundaries, {cfg.density_diffusion} "
                 f"density diffusion, {cfg.precision} on {self.solver.device}; to t = {self.output.end_time:g} s, "
                 f"outputs at {self.output.output_rate:g} Hz")

@@ -9,9 +9,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..sph.config import SolverConfig
+from ..sph.config import Plane, SolverConfig
 from ..sph.solver import BOUNDARY, FLUID, Particles
 from .boxes import box_tank, boundary_layers, lattice
+from . import reduce
 from .schema import Scene
 
 
@@ -64,6 +65,13 @@ def floor_rectangles(extent, footprints, dim: int) -> list:
     return [((x0,) if axes == 1 else (x0, y0), (x1,) if axes == 1 else (x1, y1)) for x0, x1, y0, y1 in out]
 
 
+def build_run(scene: Scene, run_config) -> Model:
+    """The model of ``scene`` under ``run_config`` (``run.resolve``), reduced as it asks."""
+    cfg = SolverConfig(**run_config.numerics)
+    reduced = reduce.apply(scene, run_config.reduction, run_config.output.end_time, cfg.dx, cfg.hdx)
+    return build(reduced, **run_config.numerics)
+
+
 def build(scene: Scene, **numerics) -> Model:
     """The model of ``scene`` with the given numerics (``SolverConfig`` fields: dx, kernel, ...)."""
     dim, up = scene.dim, scene.dim - 1
@@ -96,7 +104,13 @@ def build(scene: Scene, **numerics) -> Model:
         ptype.append(np.full(len(block), BOUNDARY))
         body.append(np.full(len(block), k, dtype=np.int32))
         bodies[o.name] = k
-    particles = Particles(pos=np.concatenate(pos), vel=np.zeros((sum(len(p) for p in pos), 3)),
+    pos = np.concatenate(pos) + np.asarray(scene.origin)
+    if any(scene.origin):
+        cfg = cfg.replace(domain_lo=tuple(np.add(cfg.domain_lo, scene.origin)),
+                          domain_hi=tuple(np.add(cfg.domain_hi, scene.origin)),
+                          planes=[Plane(point=tuple(np.add(p.point, scene.origin)), normal=p.normal) for p in cfg.planes])
+        scene = reduce.translate(scene, scene.origin)
+    particles = Particles(pos=pos, vel=np.zeros((len(pos), 3)),
                           rho=np.concatenate(rho), mass=np.concatenate(mass), ptype=np.concatenate(ptype),
                           body=np.concatenate(body))
     return Model(scene=scene, config=cfg, particles=particles, bodies=bodies)

@@ -9,10 +9,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+
 import yaml
 
 from ..sph.config import ConfigError, SolverConfig
+from .reduce import Reduction, apply
 from .schema import Scene, read_yaml, shipped
 
 # SolverConfig fields that the scene decides, or that the scene builder derives
@@ -36,18 +38,21 @@ class Output:
 
 
 OUTPUT_FIELDS = tuple(f.name for f in dataclasses.fields(Output))
-RUN_KEYS = NUMERIC_FIELDS + OUTPUT_FIELDS
+REDUCTION_FIELDS = tuple(f.name for f in dataclasses.fields(Reduction))
+RUN_KEYS = NUMERIC_FIELDS + OUTPUT_FIELDS + REDUCTION_FIELDS
 _DEFAULTS = {**{f.name: f.default for f in dataclasses.fields(SolverConfig) if f.name in NUMERIC_FIELDS},
-             **{f.name: f.default for f in dataclasses.fields(Output)}}
+             **{f.name: f.default for f in dataclasses.fields(Output)},
+             **{f.name: f.default for f in dataclasses.fields(Reduction)}}
 
 
 @dataclass
 class RunConfig:
     numerics: dict  # SolverConfig fields
     output: Output
+    reduction: Reduction = field(default_factory=Reduction)
 
     def as_dict(self) -> dict:
-        return {**self.numerics, **dataclasses.asdict(self.output)}
+        return {**self.numerics, **dataclasses.asdict(self.output), **dataclasses.asdict(self.reduction)}
 
 
 def run_config_names() -> list:
@@ -110,7 +115,9 @@ def resolve(scene: Scene, files=(), sets=(), **overrides) -> RunConfig:
     if not (math.isfinite(output.particle_rate) and 0.0 <= output.particle_rate <= output.output_rate):
         raise ConfigError("particle_rate", output.particle_rate,
                           f"a rate from 0 (no particle clouds) to output_rate ({output.output_rate:g} Hz)")
+    reduction = Reduction(**{k: merged.pop(k) for k in REDUCTION_FIELDS if k in merged}).validate()
     numerics = {k: merged[k] for k in NUMERIC_FIELDS if k in merged}
-    SolverConfig(dim=scene.dim, gravity=scene.gravity, depth=scene.depth, periodic=scene.periodic,
-                 **numerics).validate()
-    return RunConfig(numerics=numerics, output=output)
+    cfg = SolverConfig(dim=scene.dim, gravity=scene.gravity, depth=scene.depth, periodic=scene.periodic,
+                       **numerics).validate()
+    apply(scene, reduction, output.end_time, cfg.dx, cfg.hdx)  # a reduction the scene does not allow fails here
+    return RunConfig(numerics=numerics, output=output, reduction=reduction)

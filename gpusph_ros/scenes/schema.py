@@ -76,6 +76,9 @@ class Scene:
     probes: list = field(default_factory=list)
     run: dict = field(default_factory=dict)
     text: str = ""  # the file as written, recorded with each run
+    # where the tank's corner lies in the world: (0, 0, 0) but for a cropped scene (reduce.py),
+    # whose boxes and probes are given from its own corner
+    origin: tuple = (0.0, 0.0, 0.0)
 
 
 def shipped(sub: str) -> list:

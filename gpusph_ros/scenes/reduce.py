@@ -1,0 +1,214 @@
+"""Scene reductions: the same physics with fewer particles.
+
+- ``2d``: a 3D scene whose flow is uniform across y (every fluid box and obstacle spans the tank's
+  width; DamBreak 2) becomes its x-z section. Probes keep x (and z); masses are per metre of width.
+- ``slab``: the same scene cut to a thin periodic slab across y, ``slab_width`` wide (0: the
+  narrowest the cell search allows, ``min_slab_cells`` spacings, a little over three kernel
+  supports), probes moved to its middle. 3D turbulence and the 3D kernel survive; the side walls,
+  which a uniform flow does not feel, go.
+- ``crop``: along each horizontal axis, the tank is cut to what a disturbance can reach before the
+  end time, a front moving at most 2 sqrt(g H) (the dam-break front speed of shallow-water
+  theory, Ritter 1892) from the fluid's vertical faces, probes kept inside; an obstacle disturbs
+  only what has reached it already.
+  A cut becomes a plane wall, which nothing reaches before the end.
+- ``wall_planes``: every wall of boundary particles becomes a particle-less plane (the thesis ran
+  DamBreak 2's side walls so; ``sph.boundaries``, planes).
+
+``apply`` returns the reduced scene; ``applicable`` names the reductions that change a scene.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+from ..sph.config import LIST_SKIN, ConfigError
+from .schema import Scene
+
+MODELS = ("full", "slab", "2d")
+
+
+@dataclass
+class Reduction:
+    """How a run models its scene (run settings ``model``, ``slab_width``, ``crop``, ``wall_planes``)."""
+
+    model: str = "full"
+    slab_width: float = 0.0  # [m]; 0 = min_slab_cells spacings
+    crop: bool = False
+    wall_planes: bool = False
+
+    def validate(self) -> "Reduction":
+        if self.model not in MODELS:
+            raise ConfigError("model", self.model, "one of " + ", ".join(MODELS))
+        if not (math.isfinite(self.slab_width) and self.slab_width >= 0.0):
+            raise ConfigError("slab_width", self.slab_width, "a width >= 0 [m] (0 = the narrowest periodic slab)")
+        return self
+
+    @property
+    def label(self) -> str:
+        parts = [self.model] + (["crop"] if self.crop else []) + (["wall_planes"] if self.wall_planes else [])
+        return "+".join(parts)
+
+
+def min_slab_cells(hdx: float) -> int:
+    """Spacings across the narrowest periodic slab: the cell search wraps one cell each way, so a
+    period holds three cells of LIST_SKIN x 2h (sph.config)."""
+    return int(math.ceil(3 * LIST_SKIN * 2.0 * hdx - 1e-9))
+
+
+def uniform_across_y(scene: Scene) -> str:
+    """Why the flow of ``scene`` is not uniform across y, or "" when it is."""
+    if scene.dim != 3:
+        return "the scene is 2D already"
+    width = scene.tank[1]
+    for kind, boxes in (("fluid", scene.fluid), ("obstacles", scene.obstacles)):
+        for k, box in enumerate(boxes):
+            if box.lo[1] > 0.0 or box.hi[1] < width:
+                return f"{kind}[{k}] ({box.name}) does not span the tank's width y = [0, {width:g}]"
+    return ""
+
+
+def _section(scene: Scene) -> Scene:
+    """The x-z section of a scene uniform across y, as a 2D scene."""
+    def box2(box):
+        fields = {f.name: getattr(box, f.name) for f in dataclasses.fields(box)}
+        fields["lo"] = (box.lo[0], box.lo[2], 0.0)
+        fields["hi"] = (box.hi[0], box.hi[2], 0.0)
+        return type(box)(**fields)
+
+    probes = []
+    for p in scene.probes:
+        position = (p.position[0], p.position[2], 0.0) if p.type == "point" else (p.position[0], 0.0, 0.0)
+        probes.append(dataclasses.replace(p, position=position))
+    walls = {face: scene.walls.get(face, "particles") for face in ("x_min", "x_max", "floor")}
+    return dataclasses.replace(scene, dim=2, tank=(scene.tank[0], scene.tank[2], 0.0),
+                               gravity=(0.0, scene.gravity[2], 0.0), periodic=(scene.periodic[0], False, False),
+                               walls=walls, fluid=[box2(b) for b in scene.fluid],
+                               obstacles=[box2(o) for o in scene.obstacles], probes=probes)
+
+
+def _slab(scene: Scene, width: float) -> Scene:
+    def narrow(box):
+        return dataclasses.replace(box, lo=(box.lo[0], 0.0, box.lo[2]), hi=(box.hi[0], width, box.hi[2]))
+
+    probes = [dataclasses.replace(p, position=(p.position[0], 0.5 * width, p.position[2])) for p in scene.probes]
+    walls = {face: kind for face, kind in scene.walls.items() if face not in ("y_min", "y_max")}
+    return dataclasses.replace(scene, tank=(scene.tank[0], width, scene.tank[2]),
+                               periodic=(scene.periodic[0], True, False), walls=walls,
+                               fluid=[narrow(b) for b in scene.fluid], obstacles=[narrow(o) for o in scene.obstacles],
+                               probes=probes)
+
+
+def reach(scene: Scene, end_time: float) -> float:
+    """How far [m] a disturbance travels by ``end_time``: 2 sqrt(g H), H the deepest fluid."""
+    up = scene.dim - 1
+    depth = max(b.hi[up] for b in scene.fluid)
+    return 2.0 * math.sqrt(abs(scene.gravity[up]) * depth) * end_time
+
+
+def crop_window(scene: Scene, end_time: float, axis: int) -> tuple:
+    """(lo, hi) of what must be modelled along horizontal ``axis``: within ``reach`` of a
+    fluid box's face inside the tank (where the water starts to move), and every probe."""
+    length = scene.tank[axis]
+    sources = [c for b in scene.fluid for c in (b.lo[axis], b.hi[axis]) if 0.0 < c < length]
+    if not sources or scene.periodic[axis]:
+        return 0.0, length
+    d = reach(scene, end_time)
+    probes = [p.position[axis] for p in scene.probes]
+    lo = max(0.0, min([min(sources) - d] + probes))
+    hi = min(length, max([max(sources) + d] + probes))
+    return lo, hi
+
+
+def _crop(scene: Scene, end_time: float, dx: float) -> Scene:
+    """The scene cut to its crop windows (on whole spacings, so the lattice keeps its place)."""
+    lo, hi = [0.0, 0.0, 0.0], list(scene.tank)
+    walls = dict(scene.walls)
+    for axis in range(scene.dim - 1):
+        a, b = crop_window(scene, end_time, axis)
+        a = math.floor(a / dx) * dx
+        b = min(scene.tank[axis], math.ceil(b / dx) * dx)
+        if a > 0.0:
+            lo[axis] = a
+            walls["xy"[axis] + "_min"] = "planes"
+        if b < scene.tank[axis]:
+            hi[axis] = b
+            walls["xy"[axis] + "_max"] = "planes"
+    if lo == [0.0, 0.0, 0.0] and hi == list(scene.tank):
+        return scene
+
+    def inside(box):
+        return all(box.hi[k] > lo[k] and box.lo[k] < hi[k] for k in range(scene.dim - 1))
+
+    def clip(box):
+        return dataclasses.replace(box, lo=tuple(max(box.lo[k], lo[k]) for k in range(3)),
+                                   hi=tuple(min(box.hi[k], hi[k]) for k in range(3)))
+
+    cut = dataclasses.replace(scene, tank=tuple(hi), walls=walls, fluid=[clip(b) for b in scene.fluid if inside(b)],
+                              obstacles=[clip(o) for o in scene.obstacles if inside(o)])
+    # the builder's tank starts at 0: the cut is built there and moved back by its origin
+    local = translate(cut, tuple(-c for c in lo))
+    return dataclasses.replace(local, tank=tuple(hi[k] - lo[k] for k in range(3)),
+                               origin=tuple(scene.origin[k] + lo[k] for k in range(3)))
+
+
+def translate(scene: Scene, offset) -> Scene:
+    """``scene`` with its boxes and probes moved by ``offset`` (a horizontal 3-vector)."""
+    def move(point):
+        return tuple(point[k] + offset[k] for k in range(3))
+
+    def move_box(box):
+        return dataclasses.replace(box, lo=move(box.lo), hi=move(box.hi))
+
+    return dataclasses.replace(scene, fluid=[move_box(b) for b in scene.fluid],
+                               obstacles=[move_box(o) for o in scene.obstacles],
+                               probes=[dataclasses.replace(p, position=move(p.position)) for p in scene.probes])
+
+
+def apply(scene: Scene, reduction: Reduction, end_time: float, dx: float, hdx: float) -> Scene:
+    """``scene`` reduced as ``reduction`` says; ConfigError naming the setting when a reduction
+    does not fit the scene."""
+    reduction.validate()
+    if reduction.model != "full":
+        why = uniform_across_y(scene)
+        if why:
+            raise ConfigError("model", reduction.model, f"full: {why}")
+        if reduction.model == "2d":
+            scene = _section(scene)
+        else:
+            width = reduction.slab_width or min_slab_cells(hdx) * dx
+            if width < min_slab_cells(hdx) * dx * (1 - 1e-9):
+                raise ConfigError("slab_width", reduction.slab_width,
+                                  f"0 or a width >= {min_slab_cells(hdx) * dx:.4g} m ({min_slab_cells(hdx)} spacings)")
+            scene = _slab(scene, width)
+    if reduction.crop:
+        scene = _crop(scene, end_time, dx)
+    if reduction.wall_planes:
+        scene = dataclasses.replace(scene, walls={face: "planes" for face in scene.walls})
+    return scene
+
+
+def applicable(scene: Scene, end_time: float, dx: float) -> dict:
+    """{reduction label: Reduction} for each reduction that changes ``scene``, with why the
+    others do not apply under key "not applicable" ({label: reason})."""
+    out, skipped = {}, {}
+    why = uniform_across_y(scene)
+    for model in ("slab", "2d"):
+        if why:
+            skipped[model] = why
+        else:
+            out[model] = Reduction(model=model)
+    cropped = _crop(scene, end_time, dx)
+    if cropped is scene:
+        skipped["crop"] = (f"nothing lies out of reach: a front covers {reach(scene, end_time):.3g} m "
+                           f"by t = {end_time:g} s")
+    else:
+        out["crop"] = Reduction(crop=True)
+    if any(kind == "particles" for kind in scene.walls.values()):
+        out["wall_planes"] = Reduction(wall_planes=True)
+    else:
+        skipped["wall_planes"] = "every wall is a plane already"
+    if len(out) > 1 and "2d" in out:
+        out["2d+" + "+".join(k for k in ("crop", "wall_planes") if k in out)] = Reduction(
+            model="2d", crop="crop" in out, wall_planes="wall_planes" in out)
+    return {"apply": out, "not applicable": skipped}

@@ -1,0 +1,124 @@
+"""Scene reductions (gpusph_ros.scenes.reduce): the 2D section and the periodic slab of a flow
+uniform across y carry the same water per metre of width as the full 3D model, cropping keeps
+what a front can reach, and a bore modelled all three ways gives the same probe readings."""
+import numpy as np
+import pytest
+import yaml
+
+from gpusph_ros.runner import Run
+from gpusph_ros.scenes import reduce
+from gpusph_ros.scenes.build import build_run
+from gpusph_ros.scenes.run import resolve
+from gpusph_ros.scenes.schema import load_scene, parse_scene
+from gpusph_ros.sph import ConfigError
+
+FLUID = 0
+
+
+def fluid_mass(model):
+    return model.particles.mass[model.particles.ptype == FLUID].sum()
+
+
+def test_2d_and_slab_carry_the_water_per_metre_of_width():
+    scene = load_scene("dambreak2_010")
+    width = scene.tank[1]
+    full = build_run(scene, resolve(scene, dx=0.05))
+    section = build_run(scene, resolve(scene, dx=0.05, model="2d"))
+    slab = build_run(scene, resolve(scene, dx=0.05, model="slab"))
+    assert section.config.dim == 2 and section.config.gravity == (0.0, -9.81, 0.0)
+    assert slab.config.periodic == (False, True, False)
+    slab_width = reduce.min_slab_cells(slab.config.hdx) * 0.05
+    assert slab.scene.tank[1] == pytest.approx(slab_width)
+    # fill_box puts rho0 x box volume in each box: exact to rounding
+    assert fluid_mass(section) * width == pytest.approx(fluid_mass(full), rel=1e-9)
+    assert fluid_mass(slab) * width / slab_width == pytest.approx(fluid_mass(full), rel=1e-9)
+    # the side walls go: the slab is periodic, the section has none; the probes follow
+    assert {tuple(p.normal) for p in slab.config.planes} == {(1.0, 0.0, 0.0), (-1.0, 0.0, 0.0)}
+    assert all(p.position[1] == pytest.approx(0.5 * slab_width) for p in slab.scene.probes)
+    assert all(p.position[:2] == (11.1, 0.0) for p in section.scene.probes)
+
+
+def test_reductions_that_do_not_fit_are_refused_with_the_reason():
+    db1 = load_scene("dambreak1_thesis")
+    with pytest.raises(ConfigError) as err:
+        resolve(db1, model="2d")
+    assert err.value.field == "model" and "does not span the tank's width" in str(err.value)
+    db2 = load_scene("dambreak2_010")
+    with pytest.raises(ConfigError) as err:
+        resolve(db2, dx=0.05, model="slab", slab_width=0.1)
+    assert err.value.field == "slab_width" and "0.45 m (9 spacings)" in str(err.value)
+    with pytest.raises(ConfigError) as err:
+        resolve(db2, model="3d")
+    assert err.value.field == "model" and "full, slab, 2d" in str(err.value)
+    options = reduce.applicable(db1, 3.0, 0.02)
+    assert set(options["apply"]) == {"wall_planes"}
+    assert "nothing lies out of reach" in options["not applicable"]["crop"]
+
+
+def test_crop_keeps_what_a_front_reaches_and_the_world_coordinates():
+    scene = load_scene("dambreak1_thesis")
+    end = 0.2
+    reach = 2.0 * np.sqrt(9.81 * 0.4) * end  # Ritter's front speed 2 sqrt(g H) from the gate at x = 0.4 m
+    full = build_run(scene, resolve(scene, dx=0.02, end_time=end))
+    cut = build_run(scene, resolve(scene, dx=0.02, end_time=end, crop=True))
+    x_cut = np.ceil((0.4 + reach) / 0.02) * 0.02
+    assert cut.scene.tank[0] == pytest.approx(x_cut)
+    # the reservoir whole; of the 1 cm wet bed, what lies past the cut goes
+    assert fluid_mass(cut) == pytest.approx(fluid_mass(full) - 1000.0 * 0.01 * 0.67 * (1.6 - x_cut), rel=1e-9)
+    assert any(tuple(p.normal) == (-1.0, 0.0, 0.0) and p.point[0] == pytest.approx(cut.scene.tank[0])
+               for p in cut.config.planes)
+    assert len(cut.particles) < len(full.particles)
+    # probes and the obstacle stay where the scene put them
+    assert [p.position for p in cut.scene.probes] == [p.position for p in scene.probes]
+    assert (cut.scene.obstacles[0].lo, cut.scene.obstacles[0].hi) == (scene.obstacles[0].lo, scene.obstacles[0].hi)
+
+
+UNIFORM_BORE = """
+name: uniform_bore
+dim: 3
+tank: [0.8, 0.15, 0.2]
+depth: 0.1
+walls: {x_min: planes, x_max: planes, y_min: planes, y_max: planes, floor: particles}
+fluid:
+  - {name: reservoir, lo: [0.0, 0.0, 0.0], hi: [0.25, 0.15, 0.1]}
+probes:
+  bore: {type: column, position: [0.45, 0.075], radius_dx: 3}
+  surface: {type: gauge, position: [0.45, 0.075]}
+"""
+RATE = 50.0
+
+
+def bore_readings(model: str):
+    scene = parse_scene(yaml.safe_load(UNIFORM_BORE))
+    run = Run(scene, resolve(scene, dx=0.0125, end_time=0.44, output_rate=RATE, particle_rate=0.0, model=model))
+    u, eta = [], []
+    for k in range(run.n_outputs):
+        run.solver.advance(k / RATE)
+        sample = run.measurements.sample()
+        u.append(sample["columns"]["bore"]["vel"][0])
+        eta.append(sample["gauges"]["surface"])
+    return np.array(u), np.array(eta), run.solver.n
+
+
+@pytest.fixture(scope="module")
+def bores():
+    return {model: bore_readings(model) for model in ("full", "slab", "2d")}
+
+
+@pytest.mark.parametrize("model", ["slab", "2d"])
+def test_slab_and_2d_bores_agree_with_full_3d(bores, model):
+    """A dam break 0.1 m deep, 12 dx wide between plane side walls, dx = 12.5 mm: at x = 0.45 m the
+    bore arrives within two outputs (0.04 s) of the full model's, and the depth-averaged velocity
+    and surface elevation averaged from 0.06 s behind it are within 10% (the full model's own output-to-output
+    scatter there is about 10%)."""
+    u_full, eta_full, n_full = bores["full"]
+    u, eta, n = bores[model]
+    arrival_full = np.argmax(u_full > 0.1)
+    arrival = np.argmax(u > 0.1)
+    assert arrival_full > 0 and abs(arrival - arrival_full) <= 2, (arrival, arrival_full)
+    behind = slice(max(arrival, arrival_full) + 3, None)  # 0.06 s behind the front: the gauge lags the column
+    assert np.mean(u[behind]) == pytest.approx(np.mean(u_full[behind]), rel=0.10)
+    assert np.mean(eta[behind]) == pytest.approx(np.mean(eta_full[behind]), rel=0.10)
+    # and the ~1 m/s of the shallow-water bore: Ritter's u = 2/3 (c0 + x/t) at x = 0.2 m past the gate
+    assert 0.7 < np.mean(u[behind]) < 1.4
+    assert n < n_full
