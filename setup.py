@@ -39,6 +39,7 @@ setup(
             'gpusph-analyze = gpusph_ros.cli:analyze_main',
             'gpusph-sweep = gpusph_ros.cli:sweep_main',
             'gpusph-plan = gpusph_ros.cli:plan_main',
+            'gpusph-stability = gpusph_ros.cli:stability_main',
         ],
     },
 )

@@ -4,8 +4,9 @@
     gpusph-analyze DIR [--charts DIR] [--shared DIR]     (a recording, or a study's results folder)
     gpusph-sweep STUDY [--scheduler ADDRESS] [--out DIR]
     gpusph-plan SCENE [--run-config NAME|FILE ...] [--set key=value ...] [--no-reductions]
+    gpusph-stability [--out DIR] [--workers N] [--device DEV] [--kernels ...] ... [--report]
 
-(also ``python -m gpusph_ros.cli run|analyze|sweep|plan ...``). SCENE is a built-in scene name or a YAML
+(also ``python -m gpusph_ros.cli run|analyze|sweep|plan|stability ...``). SCENE is a built-in scene name or a YAML
 file; run settings layer as scenes.run describes. Exit status: 0 done, 2 the run failed a
 health check or was interrupted (its recording is closed and readable), 1 bad input.
 """
@@ -187,11 +188,42 @@ def plan_main(argv=None):
     return 0
 
 
+def stability_main(argv=None):
+    from .study import stability as st
+
+    parser = argparse.ArgumentParser(prog="gpusph-stability", description="Largest stable CFL and smallest stable "
+                                     "sound speed of each kernel x viscosity x boundary x density treatment on a "
+                                     "small dam break, and how each failure showed itself.")
+    parser.add_argument("--out", default="runs/stability", help="folder for stability.csv, .md and the map")
+    parser.add_argument("--scene", default="collapse_2d")
+    parser.add_argument("--dx", type=float, default=0.05715 / 10)
+    parser.add_argument("--end-time", type=float, default=0.3)
+    parser.add_argument("--iterations", type=int, default=4, help="bisection steps past the two ends")
+    parser.add_argument("--workers", type=int, default=2, help="runs side by side (processes)")
+    parser.add_argument("--device", default="cpu")
+    parser.add_argument("--report", action="store_true", help="only redraw the table and map from stability.csv")
+    for name, choices in (("kernels", st.KERNELS), ("viscosities", st.VISCOSITIES), ("boundaries", st.BOUNDARIES),
+                          ("densities", st.DENSITIES)):
+        parser.add_argument(f"--{name}", nargs="+", choices=choices, default=list(choices))
+    args = parser.parse_args(argv)
+    if args.report:
+        print("\n".join(f"wrote {p}" for p in st.report(args.out)))
+        return 0
+    combos = st.combinations(args.kernels, args.viscosities, args.boundaries, args.densities)
+    print(f"gpusph-stability: {len(combos)} combinations of {args.scene} at dx = {args.dx:g} m to t = "
+          f"{args.end_time:g} s on {args.device}, {args.workers} at a time", flush=True)
+    st.run_study(args.out, args.scene, args.end_time, args.dx, args.iterations, args.workers, combos, args.device,
+                 progress=lambda line: print(line, flush=True))
+    print(f"wrote {args.out}/stability.csv, stability.md, stability_map.png")
+    return 0
+
+
 def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
-    commands = {"run": run_main, "analyze": analyze_main, "sweep": sweep_main, "plan": plan_main}
+    commands = {"run": run_main, "analyze": analyze_main, "sweep": sweep_main, "plan": plan_main,
+                "stability": stability_main}
     if not argv or argv[0] not in commands:
-        print("usage: python -m gpusph_ros.cli {run,analyze,sweep,plan} ...", file=sys.stderr)
+        print("usage: python -m gpusph_ros.cli {run,analyze,sweep,plan,stability} ...", file=sys.stderr)
         return 1
     return commands[argv[0]](argv[1:])
 

@@ -32,7 +32,7 @@ def test_setup_installs_the_ament_marker_manifest_and_config(tmp_path):
         if cfg.is_file():
             assert (prefix / "share/gpusph_ros" / cfg.relative_to(REPO)).is_file(), cfg
     assert (prefix / "lib/gpusph_ros/sim_node").is_file()
-    for script in ("gpusph-run", "gpusph-analyze", "gpusph-sweep", "gpusph-plan"):
+    for script in ("gpusph-run", "gpusph-analyze", "gpusph-sweep", "gpusph-plan", "gpusph-stability"):
         assert (prefix / "lib/gpusph_ros" / script).is_file(), script
     # the installed package finds its scenes and run configurations under <prefix>/share
     site = next(prefix.glob("lib/python*/site-packages"))

@@ -185,7 +185,12 @@ def box_tank(cfg: SolverConfig, tank, fluid_boxes, walls="particles", headroom: 
     up_pad = (layers + 1) * dx
     lo[up] = -up_pad
     hi[up] = tank[up] * (1.0 + headroom) + up_pad
-    cfg = cfg.replace(domain_lo=tuple(lo), domain_hi=tuple(hi), planes=planes)
+    # the faces fluid must not cross: walls on every non-periodic axis and the floor, not the open top
+    far = 1.0e30
+    wall_lo = [0.0 if ax < dim and not periodic[ax] else -far for ax in range(3)]
+    wall_hi = [tank[ax] if ax < up and not periodic[ax] else far for ax in range(3)]
+    cfg = cfg.replace(domain_lo=tuple(lo), domain_hi=tuple(hi), planes=planes, wall_lo=tuple(wall_lo),
+                      wall_hi=tuple(wall_hi))
     n_f, n_w = len(fluid), len(wall)
     particles = Particles(
         pos=np.concatenate([fluid, wall]),

@@ -104,11 +104,15 @@ def build(scene: Scene, **numerics) -> Model:
         ptype.append(np.full(len(block), BOUNDARY))
         body.append(np.full(len(block), k, dtype=np.int32))
         bodies[o.name] = k
+    cfg = cfg.replace(solids=[(tuple(o.lo), tuple(o.hi)) for o in scene.obstacles])
     pos = np.concatenate(pos) + np.asarray(scene.origin)
     if any(scene.origin):
-        cfg = cfg.replace(domain_lo=tuple(np.add(cfg.domain_lo, scene.origin)),
-                          domain_hi=tuple(np.add(cfg.domain_hi, scene.origin)),
-                          planes=[Plane(point=tuple(np.add(p.point, scene.origin)), normal=p.normal) for p in cfg.planes])
+        def move(point):
+            return tuple(c + o if abs(c) < 1.0e30 else c for c, o in zip(point, scene.origin))
+
+        cfg = cfg.replace(domain_lo=move(cfg.domain_lo), domain_hi=move(cfg.domain_hi), wall_lo=move(cfg.wall_lo),
+                          wall_hi=move(cfg.wall_hi), solids=[(move(lo), move(hi)) for lo, hi in cfg.solids],
+                          planes=[Plane(point=move(p.point), normal=p.normal) for p in cfg.planes])
         scene = reduce.translate(scene, scene.origin)
     particles = Particles(pos=pos, vel=np.zeros((len(pos), 3)),
                           rho=np.concatenate(rho), mass=np.concatenate(mass), ptype=np.concatenate(ptype),

@@ -18,7 +18,8 @@ from .reduce import Reduction, apply
 from .schema import Scene, read_yaml, shipped
 
 # SolverConfig fields that the scene decides, or that the scene builder derives
-SCENE_FIELDS = ("dim", "gravity", "depth", "domain_lo", "domain_hi", "periodic", "planes")
+SCENE_FIELDS = ("dim", "gravity", "depth", "domain_lo", "domain_hi", "periodic", "planes", "wall_lo", "wall_hi",
+                "solids")
 NUMERIC_FIELDS = tuple(f.name for f in dataclasses.fields(SolverConfig) if f.name not in SCENE_FIELDS)
 
 

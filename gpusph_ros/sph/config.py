@@ -80,6 +80,22 @@ class SolverConfig:
     planes: list = field(default_factory=list)
     rho_min_ratio: float = 0.8  # health check: density bounds as fractions of rho0
     rho_max_ratio: float = 1.25
+    # failure detectors for what does not show as NaN (passes.py, CHECKS):
+    # wall_penetration: a fluid particle deeper than penetration_ratio dx beyond a wall face (the
+    # first layer of wall particles sits dx/2 behind it) or inside a solid
+    penetration_ratio: float = 0.5
+    # clumping: more than clump_fraction of the fluid particles have a fluid neighbour closer than
+    # clump_ratio dx (tensile instability, pairing); clump_ratio 0 = off
+    clump_ratio: float = 0.25
+    clump_fraction: float = 0.2
+    # energy_growth: kinetic + potential + elastic energy of the fluid above its start by more than
+    # energy_growth_ratio x M g H (M the fluid's mass, H = depth); nothing feeds a closed tank; 0 = off
+    energy_growth_ratio: float = 0.05
+    # the tank's inside [wall_lo, wall_hi] (beyond +-1e30 where there is no wall: periodic axes, the
+    # open top) and the solid boxes (lo, hi) fluid must stay out of; set by the scene builder
+    wall_lo: tuple = (-1.0e30, -1.0e30, -1.0e30)
+    wall_hi: tuple = (1.0e30, 1.0e30, 1.0e30)
+    solids: list = field(default_factory=list)
 
     # -- derived quantities -------------------------------------------------------------
     @property
@@ -135,7 +151,8 @@ class SolverConfig:
         choice("precision", PRECISIONS)
         for name in ("dx", "hdx", "rho0", "gamma", "depth", "cfl", "c0_coef", "xsph_eps", "mk_beta"):
             positive(name)
-        for name in ("alpha", "nu", "sps_cs", "sps_ci", "delta", "c0", "dt_fixed", "settle_tau", "settle_until"):
+        for name in ("alpha", "nu", "sps_cs", "sps_ci", "delta", "c0", "dt_fixed", "settle_tau", "settle_until",
+                     "penetration_ratio", "clump_ratio", "clump_fraction", "energy_growth_ratio"):
             positive(name, strict=False)
         if self.mk_beta < 1.0:
             raise ConfigError("mk_beta", self.mk_beta, "a number >= 1 (boundary particles no sparser than fluid)")
@@ -145,7 +162,7 @@ class SolverConfig:
             raise ConfigError("cpu_threads", self.cpu_threads, "an integer >= 0 (0 = every core)")
         if not isinstance(self.shepard_every, int) or self.shepard_every < 0:
             raise ConfigError("shepard_every", self.shepard_every, "an integer >= 0 (0 = off)")
-        for name in ("gravity", "domain_lo", "domain_hi", "periodic"):
+        for name in ("gravity", "domain_lo", "domain_hi", "periodic", "wall_lo", "wall_hi"):
             vector(name)
         if self.g_norm <= 0.0:
             raise ConfigError("gravity", self.gravity, "a non-zero vector (it sets c0 and the wall forces)")

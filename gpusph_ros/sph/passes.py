@@ -7,8 +7,23 @@ each model lives in its own module and is only combined here.
 Step (predictor-corrector as GPUSPH, Herault et al. 2010):
   neighbours(x_n) -> eos -> [sps] -> interact(n) -> choose_dt
   -> integrate(dt/2) -> eos -> [sps] -> interact(n+1/2) -> integrate(dt) into the candidate state
-  -> health(candidate) -> commit (only if healthy) -> tick -> [shepard every N steps]
+  -> health(candidate) -> [energy(candidate) -> energy_check, every few steps]
+  -> commit (only if healthy) -> tick -> [shepard every N steps]
 The committed state is never overwritten by a candidate that failed a health check.
+
+Health checks (CHECKS), each a way a run fails:
+- non_finite: NaN or infinity in a position, velocity or density;
+- outside_domain: a fluid particle left the domain (the tank, its walls and headroom);
+- density_bounds: a density outside [rho_min, rho_max] (0.8 and 1.25 rho0 by default);
+- wall_penetration: a fluid particle more than ``penetration_ratio`` dx beyond a wall face of the
+  tank, or as deep inside a solid box: the boundary let it through;
+- clumping: more than ``clump_fraction`` of the fluid particles have a fluid neighbour closer
+  than ``clump_ratio`` dx, marked in the force pass (the tensile and pairing instabilities pair
+  particles long before anything is infinite; a few pairs in a splash are no failure);
+- energy_growth: the fluid's kinetic + potential + elastic energy (Tait law integrated,
+  e(rho) = B/rho0 ((rho/rho0)^(gamma-1) - 1)/(gamma-1) + B (1/rho - 1/rho0)) more than
+  ``energy_growth_ratio`` M g H above its value at the start: in a closed tank with no inflow
+  every term of the scheme conserves or dissipates it, so growth is the integrator going unstable.
 """
 
 import functools
@@ -21,12 +36,18 @@ FLUID = 0
 BOUNDARY = 1
 
 # health checks, in the order they are reported
-CHECKS = ("non_finite", "outside_domain", "density_bounds")
+CHECKS = ("non_finite", "outside_domain", "density_bounds", "wall_penetration", "clumping", "energy_growth")
+# checks of the whole state, not of one particle
+GLOBAL_CHECKS = ("energy_growth",)
+N_CHECKS = len(CHECKS)
 NO_FAILURE = 2 ** 31 - 1
 DYNAMIC = boundaries.BOUNDARY_ID["dynamic"]
 LENNARD_JONES = boundaries.BOUNDARY_ID["lennard_jones"]
 ARTIFICIAL = viscosity.VISCOSITY_ID["artificial"]
 SPS = viscosity.VISCOSITY_ID["sps"]
+WALL_PENETRATION = CHECKS.index("wall_penetration")
+CLUMPING = CHECKS.index("clumping")
+ENERGY_GROWTH = CHECKS.index("energy_growth")
 
 
 @functools.lru_cache(maxsize=None)
@@ -76,6 +97,14 @@ def build(scalar):
         settle_tau: wp.float64  # velocity relaxation time while settling; 0 = off
         settle_until: wp.float64
         n_planes: int
+        wall_lo: vec
+        wall_hi: vec
+        penetration: scalar  # penetration_ratio dx
+        n_solids: int
+        clump_r: scalar  # clump_ratio dx
+        clump_fraction: wp.float64
+        n_fluid: int
+        energy_slack: wp.float64  # energy_growth_ratio M g H; 0 = off
 
     @wp.struct
     class Fields:
@@ -134,7 +163,11 @@ def build(scalar):
 
     @wp.func
     def healthy(fail: wp.array(dtype=wp.int32)) -> bool:
-        return fail[0] == NO_FAILURE and fail[1] == NO_FAILURE and fail[2] == NO_FAILURE
+        bad = int(0)
+        for k in range(N_CHECKS):
+            if fail[k] != NO_FAILURE:
+                bad = 1
+        return bad == 0
 
     @wp.func
     def track_max(maxima: wp.array(dtype=scalar), k: int, value: scalar):
@@ -177,19 +210,23 @@ def build(scalar):
     def interact(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32), f: Fields,
                  plane_point: wp.array(dtype=vec), plane_normal: wp.array(dtype=vec),
                  acc: wp.array(dtype=vec), drho: wp.array(dtype=scalar), xsph: wp.array(dtype=vec),
-                 maxima: wp.array(dtype=scalar), chunk: int, stride: int):
+                 maxima: wp.array(dtype=scalar), clumped: wp.array(dtype=wp.int32), chunk: int, stride: int):
         i = wp.tid() * stride + chunk
         xi = f.pos[i]
         base = i * grid.max_neighbours
         a = vec(scalar(0.0))
         dr = scalar(0.0)
         xs = vec(scalar(0.0))
+        close = int(0)
         if f.ptype[i] == FLUID:
             a = p.gravity
             mu_max = scalar(0.0)
             for k in range(count[i]):
                 j = nbr[base + k]
-                da, ddr, dxs, mu = pair(p, f, i, j, separation(grid, xi, f.pos[j]))
+                r_ij = separation(grid, xi, f.pos[j])
+                if f.ptype[j] == FLUID and wp.dot(r_ij, r_ij) < p.clump_r * p.clump_r:
+                    close = 1
+                da, ddr, dxs, mu = pair(p, f, i, j, r_ij)
                 a += da
                 dr += ddr
                 xs += dxs
@@ -226,6 +263,7 @@ def build(scalar):
         acc[i] = a
         drho[i] = dr
         xsph[i] = xs
+        clumped[i] = close
 
     @wp.kernel(enable_backward=False, module="unique")
     def choose_dt(p: Params, t_target: wp.float64, maxima: wp.array(dtype=scalar), fail: wp.array(dtype=wp.int32),
@@ -289,19 +327,72 @@ def build(scalar):
 
     @wp.kernel(enable_backward=False, module="unique")
     def health(p: Params, pos: wp.array(dtype=vec), vel: wp.array(dtype=vec), rho: wp.array(dtype=scalar),
-               ptype: wp.array(dtype=wp.int32), fail: wp.array(dtype=wp.int32)):
+               ptype: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32), solid_lo: wp.array(dtype=vec),
+               solid_hi: wp.array(dtype=vec), fail: wp.array(dtype=wp.int32)):
+        """Flags each check a particle of the candidate state fails, by the caller's particle id
+        (the slots are re-sorted by later steps of the batch)."""
         i = wp.tid()
+        pid = ids[i]
         x = pos[i]
         r = rho[i]
         if wp.isnan(x) or wp.isinf(x) or wp.isnan(vel[i]) or wp.isinf(vel[i]) or wp.isnan(r) or wp.isinf(r):
-            wp.atomic_min(fail, 0, i)
+            wp.atomic_min(fail, 0, pid)
             return
         if ptype[i] == FLUID:
             for ax in range(3):
                 if x[ax] < p.lo[ax] or x[ax] > p.hi[ax]:
-                    wp.atomic_min(fail, 1, i)
+                    wp.atomic_min(fail, 1, pid)
+                if x[ax] < p.wall_lo[ax] - p.penetration or x[ax] > p.wall_hi[ax] + p.penetration:
+                    wp.atomic_min(fail, WALL_PENETRATION, pid)
+            for k in range(p.n_solids):
+                lo = solid_lo[k]
+                hi = solid_hi[k]
+                outside = int(0)
+                for ax in range(p.dim):
+                    if x[ax] <= lo[ax] + p.penetration or x[ax] >= hi[ax] - p.penetration:
+                        outside = 1
+                if outside == 0:
+                    wp.atomic_min(fail, WALL_PENETRATION, pid)
         if r < p.rho_min or r > p.rho_max:
-            wp.atomic_min(fail, 2, i)
+            wp.atomic_min(fail, 2, pid)
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def census(p: Params, pos: wp.array(dtype=vec), vel: wp.array(dtype=vec), rho: wp.array(dtype=scalar),
+               mass: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32),
+               clumped: wp.array(dtype=wp.int32), total: wp.array(dtype=wp.float64), count: wp.array(dtype=wp.int32)):
+        """total[0] += the fluid's kinetic + potential + elastic energy; count = [clumped fluid
+        particles, the first of them] (one launch: atomics)."""
+        i = wp.tid()
+        if ptype[i] != FLUID:
+            return
+        if clumped[i] != 0:
+            wp.atomic_add(count, 0, 1)
+            wp.atomic_min(count, 1, ids[i])
+        u = vel[i]
+        ratio = rho[i] / p.rho0
+        elastic = (p.eos_b / p.rho0 * (wp.pow(ratio, p.gamma - scalar(1.0)) - scalar(1.0)) / (p.gamma - scalar(1.0))
+                   + p.eos_b * (scalar(1.0) / rho[i] - scalar(1.0) / p.rho0))
+        e = mass[i] * (scalar(0.5) * wp.dot(u, u) - wp.dot(p.gravity, pos[i]) + elastic)
+        wp.atomic_add(total, 0, wp.float64(e))
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def census_check(p: Params, total: wp.array(dtype=wp.float64), count: wp.array(dtype=wp.int32),
+                     fail: wp.array(dtype=wp.int32)):
+        """total = [candidate's energy, energy at the start (or +inf before the first check), the
+        largest seen, the largest clumped fraction seen]: flags energy_growth when the candidate
+        exceeds the start by the slack, clumping when too many particles have clumped."""
+        e = total[0]
+        if total[1] == wp.float64(1.0e300):
+            total[1] = e
+        total[2] = wp.max(total[2], e)
+        if p.energy_slack > wp.float64(0.0) and e > total[1] + p.energy_slack:
+            fail[ENERGY_GROWTH] = 0
+        fraction = wp.float64(count[0]) / wp.float64(p.n_fluid)
+        total[3] = wp.max(total[3], fraction)
+        if p.clump_r > scalar(0.0) and fraction > p.clump_fraction:
+            fail[CLUMPING] = count[1]
+        count[0] = 0  # ready for the next census
+        count[1] = NO_FAILURE
 
     @wp.kernel(enable_backward=False, module="unique")
     def commit(fail: wp.array(dtype=wp.int32), pos_new: wp.array(dtype=vec), vel_new: wp.array(dtype=vec),
@@ -363,5 +454,5 @@ def build(scalar):
                 den += f.mass[j] / f.rho[j] * wk
         rho_out[i] = num / den
 
-    return (Params, Fields, equation_of_state, sps_strain, interact, choose_dt, integrate, health, commit, tick,
-            shepard, permute)
+    return (Params, Fields, equation_of_state, sps_strain, interact, choose_dt, integrate, health, census,
+            census_check, commit, tick, shepard, permute)

@@ -24,6 +24,10 @@ _MAX_BATCH = 64  # steps launched between two reads of the clock
 # steps between two sorts of the particle arrays into cell order: neighbours then sit next to each
 # other in memory, which the force passes (memory-bound on a CPU, coalesced on a GPU) need
 _REORDER_EVERY = 16
+# steps between two energy and clumping checks: the sums are one atomic launch, cheap but not free
+# on a GPU
+_CENSUS_EVERY = 16
+_NO_ENERGY = 1.0e300  # the energy check's "no reference yet"
 
 
 class HealthError(RuntimeError):
@@ -89,7 +93,10 @@ class Solver:
         if self.n == 0:
             raise ValueError("particles: the particle set is empty")
         (self._Params, self._Fields, self._eos, self._sps, self._interact, self._choose_dt, self._integrate,
-         self._health, self._commit, self._tick, self._shepard, self._permute) = passes.build(self.scalar)
+         self._health, self._census, self._census_check, self._commit, self._tick, self._shepard,
+         self._permute) = passes.build(self.scalar)
+        self._fluid_mass = float(particles.mass[particles.ptype == FLUID].sum())
+        self.n_fluid = int((particles.ptype == FLUID).sum())
         self.params = self._make_params()
         self.launch = Launcher(self.device, cfg.cpu_threads)
         self._allocate(particles)
@@ -140,6 +147,16 @@ class Solver:
         p.settle_tau = cfg.settle_tau
         p.settle_until = cfg.settle_until
         p.n_planes = len(cfg.planes)
+        p.wall_lo = self.vec(*cfg.wall_lo)
+        p.wall_hi = self.vec(*cfg.wall_hi)
+        p.penetration = cfg.penetration_ratio * cfg.dx
+        p.n_solids = len(cfg.solids)
+        p.clump_r = cfg.clump_ratio * cfg.dx
+        p.clump_fraction = cfg.clump_fraction
+        p.n_fluid = max(1, self.n_fluid)
+        # the energy check's slack: a fraction of M g H
+        self._energy_slack = cfg.energy_growth_ratio * self._fluid_mass * cfg.g_norm * cfg.depth
+        p.energy_slack = self._energy_slack
         return p
 
     def _allocate(self, particles: Particles):
@@ -177,7 +194,15 @@ class Solver:
         nrm = [np.asarray(p.normal, dtype=np.float64) / np.linalg.norm(p.normal) for p in planes] or [(0.0, 0.0, 1.0)]
         self._plane_pt, self._plane_n = arr(np.asarray(pts, dtype=np.float64), v), arr(np.asarray(nrm), v)
         self._maxima = wp.zeros(2 * self.launch.threads, dtype=s, device=dev)  # |a|max, |mu|max per chunk
-        self._fail = arr(np.full(3, passes.NO_FAILURE, dtype=np.int32), wp.int32)
+        solids = cfg.solids or [((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))]
+        self._solid_lo = arr(np.asarray([lo for lo, _ in solids], dtype=np.float64), v)
+        self._solid_hi = arr(np.asarray([hi for _, hi in solids], dtype=np.float64), v)
+        self._fail = arr(np.full(passes.N_CHECKS, passes.NO_FAILURE, dtype=np.int32), wp.int32)
+        # candidate's energy, energy at the start, the largest seen, the largest clumped fraction seen
+        # (passes.census_check); clumped fluid particles and the first of them
+        self._energy_sum = arr(np.array([0.0, _NO_ENERGY, -_NO_ENERGY, 0.0]), wp.float64)
+        self._clumped = wp.zeros(n, dtype=wp.int32, device=dev)
+        self._clump_count = arr(np.array([0, passes.NO_FAILURE], dtype=np.int32), wp.int32)
         self._clock = wp.zeros(4, dtype=wp.float64, device=dev)  # t, dt, stable dt, time of a failed step
         self._steps = arr(np.array([0, -1], dtype=np.int32), wp.int32)  # steps, failed step
         wp.launch(self._eos, dim=n, inputs=[self.params, self._fields], device=dev)
@@ -196,7 +221,7 @@ class Solver:
         if self.config.viscosity == "sps":
             self.launch(self._sps, n, [p, nl.grid, nl.nbr, nl.count, f])
         self.launch(self._interact, n, [p, nl.grid, nl.nbr, nl.count, f, self._plane_pt, self._plane_n, self.acc,
-                                        self._drho, self._xsph, self._maxima])
+                                        self._drho, self._xsph, self._maxima, self._clumped])
 
     def _reorder(self):
         state = [self.pos, self.vel, self.rho, self.mass, self.ptype, self.body, self.ids, self._needs_list]
@@ -221,8 +246,15 @@ class Solver:
         wp.launch(self._integrate, dim=n,
                   inputs=[p, self._clock, 1.0, self.pos, self.vel, self.rho, self.ptype, self._vel_h, self.acc,
                           self._drho, self._xsph, self._pos_c, self._vel_c, self._rho_c], device=dev)
-        wp.launch(self._health, dim=n, inputs=[p, self._pos_c, self._vel_c, self._rho_c, self.ptype, self._fail],
-                  device=dev)
+        wp.launch(self._health, dim=n, inputs=[p, self._pos_c, self._vel_c, self._rho_c, self.ptype, self.ids,
+                                               self._solid_lo, self._solid_hi, self._fail], device=dev)
+        if self._launched % _CENSUS_EVERY == 0:
+            self._energy_sum[0:1].zero_()
+            wp.launch(self._census, dim=n, inputs=[p, self._pos_c, self._vel_c, self._rho_c, self.mass, self.ptype,
+                                                   self.ids, self._clumped, self._energy_sum, self._clump_count],
+                      device=dev)
+            wp.launch(self._census_check, dim=1, inputs=[p, self._energy_sum, self._clump_count, self._fail],
+                      device=dev)
         wp.launch(self._commit, dim=n, inputs=[self._fail, self._pos_c, self._vel_c, self._rho_c, self.pos,
                                                self.vel, self.rho], device=dev)
         wp.launch(self._tick, dim=1, inputs=[self._fail, self._clock, self._steps], device=dev)
@@ -247,8 +279,18 @@ class Solver:
         fail = self._fail.numpy()
         self.time, self.dt, self.dt_stable, self.steps = float(clock[0]), float(clock[1]), float(clock[2]), int(steps[0])
         for check, idx in zip(passes.CHECKS, fail):
-            if idx != passes.NO_FAILURE:
-                raise HealthError(check, int(steps[1]), float(clock[3]), int(self.ids.numpy()[idx]))
+            if idx == passes.NO_FAILURE:
+                continue
+            if check in passes.GLOBAL_CHECKS:
+                e = self._energy_sum.numpy()
+                raise HealthError(check, int(steps[1]), float(clock[3]), -1,
+                                  f"fluid energy {e[0]:.6g} J, {e[0] - e[1]:.3g} J above its start "
+                                  f"({self.config.energy_growth_ratio:g} M g H = {self._energy_slack:.3g} J allowed)")
+            detail = ""
+            if check == "clumping":
+                detail = (f"{self._energy_sum.numpy()[3]:.1%} of the fluid particles have a neighbour closer than "
+                          f"{self.config.clump_ratio:g} dx (more than {self.config.clump_fraction:.0%} allowed)")
+            raise HealthError(check, int(steps[1]), float(clock[3]), int(idx), detail)
         overflow = int(self.neighbours.overflow.numpy()[0])
         if overflow:
             raise NeighbourOverflow(f"a particle has {overflow} neighbours, more than the list's "
@@ -292,7 +334,7 @@ class Solver:
 
     # fields whose change needs new particles or new buffers: only a fresh Solver takes them
     REBUILD_FIELDS = ("dim", "dx", "hdx", "boundary", "mk_beta", "precision", "device", "cpu_threads",
-                      "domain_lo", "domain_hi", "periodic", "planes")
+                      "domain_lo", "domain_hi", "periodic", "planes", "wall_lo", "wall_hi", "solids")
 
     def reconfigure(self, **changes):
         """Change numerics that apply from the next step (cfl, dt_fixed, viscosity, ...)."""
@@ -304,7 +346,7 @@ class Solver:
 
     def clear_failure(self):
         """Forget a reported failure so the run can go on (e.g. after changing dt_fixed)."""
-        self._fail.assign(np.full(3, passes.NO_FAILURE, dtype=np.int32))
+        self._fail.assign(np.full(passes.N_CHECKS, passes.NO_FAILURE, dtype=np.int32))
         self._steps.assign(np.array([self._steps.numpy()[0], -1], dtype=np.int32))
         self.neighbours.overflow.zero_()
 

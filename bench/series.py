@@ -1,0 +1,68 @@
+"""One run of a scene with only the solver (no ROS), every probe and body force sampled at the
+scene's output rate into flat named series; what bench/economy.py and bench/precision.py measure.
+
+Series names: ``points/<probe>/u`` (x velocity), ``points/<probe>/p``, ``columns/<probe>/u``,
+``profiles/<probe>/h<k>`` (x velocity at the k-th height), ``gauges/<probe>``, ``wrenches/<body>/fx``.
+"""
+import time
+
+import numpy as np
+import warp as wp
+
+
+def flatten(sample: dict) -> dict:
+    out = {}
+    for name, v in sample["points"].items():
+        out[f"points/{name}/u"] = float(v["vel"][0])
+        out[f"points/{name}/p"] = float(v["pressure"])
+    for name, v in sample["columns"].items():
+        out[f"columns/{name}/u"] = float(v["vel"][0])
+    for name, v in sample["profiles"].items():
+        for k, vel in enumerate(v["vel"]):
+            out[f"profiles/{name}/h{k}"] = float(vel[0])
+    for name, v in sample["gauges"].items():
+        out[f"gauges/{name}"] = float(v)
+    for name, (force, _) in sample["wrenches"].items():
+        out[f"wrenches/{name}/fx"] = float(force[0])
+    return out
+
+
+def run_series(scene_name: str, **settings) -> dict:
+    """Run ``scene_name`` under run ``settings`` (``scenes.run.resolve`` keys); the record: counts,
+    steps, wall time (kernel loading excluded), MIPPS, how it ended, and ``series`` {name: list}
+    with ``t``."""
+    wp.config.log_level = wp.LOG_WARNING
+    from gpusph_ros.measure.suite import Measurements
+    from gpusph_ros.scenes.build import build_run
+    from gpusph_ros.scenes.run import resolve
+    from gpusph_ros.scenes.schema import load_scene
+    from gpusph_ros.sph import HealthError, NeighbourOverflow, Solver
+
+    scene = load_scene(scene_name)
+    config = resolve(scene, **settings)
+    built = build_run(scene, config)
+    solver = Solver(built.config, built.particles)
+    measurements = Measurements(solver, built)
+    rate, end = config.output.output_rate, config.output.end_time
+    series = {"t": []}
+    status = "completed"
+    solver.step()  # loads the kernels, untimed
+    wp.synchronize_device(solver.device)
+    steps0, start = solver.steps, time.perf_counter()
+    try:
+        for k in range(1, int(np.floor(end * rate + 1e-9)) + 1):
+            solver.advance(k / rate)
+            series["t"].append(solver.time)
+            for name, value in flatten(measurements.sample()).items():
+                series.setdefault(name, []).append(value)
+    except (HealthError, NeighbourOverflow) as err:
+        status = f"failed: {err}"
+    wp.synchronize_device(solver.device)
+    wall = time.perf_counter() - start
+    steps = solver.steps - steps0
+    cfg = built.config
+    return {"scene": scene_name, "model": config.reduction.label, "dx": cfg.dx, "kernel": cfg.kernel,
+            "precision": cfg.precision, "device": str(solver.device), "particles": solver.n,
+            "fluid_particles": built.fluid_particles, "steps": steps, "wall_s": wall,
+            "mipps": solver.n * steps / wall / 1e6 if wall > 0 else 0.0, "simulated_s": solver.time,
+            "status": status, "series": series}

@@ -1,0 +1,86 @@
+"""Failure detectors for what does not show as NaN (sph.passes, CHECKS): each fires on a run broken
+on purpose and stays quiet on the same run done right.
+
+- wall_penetration: a column thrown at 3 m/s onto a Lennard-Jones floor (Monaghan 1994; thesis
+  Eq. 2.24) whose strength D = 5 g H is taken with H = 0.1 mm instead of the column's 0.11 m;
+- clumping: a periodic block of fluid 10% below rho0, under uniform tension, the textbook tensile
+  instability (Swegle et al. 1995), against the same block at rho0;
+- energy_growth: the 2D column collapse stepped at 3x the stable time step (the predictor-corrector
+  then gains energy, Monaghan 1992) against 1x, in a closed tank, where energy may only fall.
+"""
+import dataclasses
+
+import numpy as np
+import pytest
+
+from gpusph_ros.scenes.build import build
+from gpusph_ros.scenes.schema import load_scene
+from gpusph_ros.sph import HealthError, Particles, Solver
+from gpusph_ros.sph.config import SolverConfig
+
+WIDE = dict(rho_min_ratio=0.2, rho_max_ratio=5.0)  # so the density check does not speak first
+
+
+def collapse(**numerics):
+    scene = load_scene("collapse_2d")
+    return build(scene, dx=scene.fluid[0].hi[0] / 15, **numerics)
+
+
+def outcome(cfg, particles, end):
+    """The check that stopped the run, or None when it reached ``end``."""
+    solver = Solver(cfg, particles)
+    try:
+        solver.advance(end)
+    except HealthError as err:
+        return err
+    assert solver.time == pytest.approx(end)
+    return None
+
+
+@pytest.mark.parametrize("depth, fires", [(0.1143, False), (1.0e-4, True)])
+def test_wall_penetration(depth, fires):
+    model = collapse(boundary="lennard_jones")
+    falling = dataclasses.replace(model.particles, vel=model.particles.vel.copy())
+    falling.vel[model.particles.ptype == 0, 1] = -3.0
+    cfg = model.config.replace(depth=depth, c0=10.0 * np.sqrt(9.81 * 0.1143), energy_growth_ratio=0.0, **WIDE)
+    err = outcome(cfg, falling, 0.05)
+    if not fires:
+        assert err is None, err
+        return
+    assert err is not None and err.check == "wall_penetration", err
+    assert 0 <= err.particle < len(falling) and falling.ptype[err.particle] == 0
+
+
+@pytest.mark.parametrize("rho_ratio, fires", [(1.0, False), (0.9, True)])
+def test_clumping(rho_ratio, fires):
+    dx, n = 0.01, 30
+    axis = (np.arange(n) + 0.5) * dx
+    x, y = np.meshgrid(axis, axis, indexing="ij")
+    pos = np.zeros((n * n, 3))
+    pos[:, 0], pos[:, 1] = x.ravel(), y.ravel()
+    pos[:, :2] += np.random.default_rng(1).normal(0.0, 0.02 * dx, (n * n, 2))  # a seed for the instability
+    cfg = SolverConfig(dim=2, dx=dx, gravity=(0.0, -1.0e-3, 0.0), depth=0.1, c0=5.0, density_diffusion="none",
+                       domain_lo=(0.0, 0.0, -1.0), domain_hi=(n * dx, n * dx, 1.0), periodic=(True, True, False),
+                       **WIDE)
+    particles = Particles(pos=pos, vel=np.zeros((n * n, 3)), rho=np.full(n * n, 1000.0 * rho_ratio),
+                          mass=np.full(n * n, 1000.0 * dx * dx), ptype=np.zeros(n * n))
+    err = outcome(cfg, particles, 0.5)
+    if not fires:
+        assert err is None, err
+        return
+    assert err is not None and err.check == "clumping", err
+    assert "of the fluid particles have a neighbour closer than 0.25 dx" in str(err)
+
+
+@pytest.mark.parametrize("factor, fires", [(1.0, False), (3.0, True)])
+def test_energy_growth(factor, fires):
+    model = collapse()
+    probe = Solver(model.config, model.particles)
+    probe.step()
+    cfg = model.config.replace(dt_fixed=factor * probe.dt_stable, **WIDE)
+    err = outcome(cfg, model.particles, 0.3)
+    if not fires:
+        assert err is None, err
+        return
+    assert err is not None and err.check == "energy_growth", err
+    assert err.particle == -1 and "above its start" in str(err)
