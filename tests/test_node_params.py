@@ -20,7 +20,7 @@ def test_the_issue_list_of_parameters_is_declared():
     names = {p.name for p in PARAMS}
     assert names == {"scene", "dx", "kernel", "viscosity", "sps", "boundary", "density_diffusion", "precision",
                      "device", "cfl", "c0", "end_time", "output_rate", "real_time_factor", "publish_particles",
-                     "particle_fields", "record_dir", "frame_id", "autostart"}
+                     "particle_fields", "record_dir", "frame_id", "autostart", "model", "crop", "wall_planes"}
     for p in PARAMS:
         assert p.description and p.applies in (node_params.RESET, node_params.LIVE, node_params.RECORDING,
                                                node_params.STARTUP)
@@ -46,6 +46,8 @@ def test_defaults_describe_a_run():
     ({"particle_fields": ["vx", "speed"]}, ["particle_fields", "'speed'", "density"]),
     ({"particle_fields": ["vx", "vx"]}, ["particle_fields", "twice"]),
     ({"frame_id": " "}, ["frame_id"]),
+    ({"model": "3d"}, ["model", "full, slab, 2d"]),
+    ({"model": "2d"}, ["model", "obstacles[0] (obstruction) does not span the tank's width"]),
     ({"record_dir": str(REPO / "setup.py" / "bags")}, ["record_dir", "writable"]),
 ])
 def test_a_bad_value_gets_a_reason_naming_the_field_and_the_allowed_values(changes, words):
@@ -62,6 +64,8 @@ def test_a_combination_is_checked_as_a_whole():
     assert config.numerics["viscosity"] == "sps"
     _, config = run_settings(_values(publish_particles=False))
     assert config.output.particle_every == 0
+    _, config = run_settings(_values(scene="dambreak2_010", dx=0.05, model="slab", wall_planes=True))
+    assert (config.reduction.model, config.reduction.wall_planes) == ("slab", True)
 
 
 def test_shipped_parameter_files_cover_every_scene_and_describe_runs():

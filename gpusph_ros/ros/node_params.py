@@ -11,6 +11,7 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..scenes.reduce import MODELS
 from ..scenes.run import resolve
 from ..scenes.schema import builtin_names, load_scene
 from ..sph.config import BOUNDARIES, DENSITY_DIFFUSIONS, KERNELS, PRECISIONS, ConfigError
@@ -50,6 +51,10 @@ PARAMS = (
           choices=BOUNDARIES),
     Param("density_diffusion", "delta", "density treatment: none, or delta-SPH (Molteni & Colagrossi 2009)", LIVE,
           choices=DENSITY_DIFFUSIONS),
+    Param("model", "full", "how the scene is modelled: full, slab (a thin periodic slab across y) or 2d (the x-z "
+          "section), for a flow uniform across y such as dambreak2_*", RESET, choices=MODELS),
+    Param("crop", False, "cut the tank to what a front moving at 2 sqrt(g H) reaches by the end time", RESET),
+    Param("wall_planes", False, "every wall of boundary particles as a particle-less plane", RESET),
     Param("precision", "float32", "floating-point precision of the solver state", RESET, choices=PRECISIONS),
     Param("device", "cpu", "Warp device: cpu or cuda:N", RESET),
     Param("cfl", 0.3, "Courant number of the adaptive time step (thesis Eq. 2.23)", LIVE, lo=0.01, hi=1.0),
@@ -132,7 +137,8 @@ def run_settings(values: dict):
     numerics = {k: values[k] for k in ("dx", "kernel", "boundary", "density_diffusion", "precision", "device",
                                        "cfl", "c0")}
     numerics["viscosity"] = "sps" if values["sps"] else values["viscosity"]
-    config = resolve(scene, **numerics, **output, particle_rate=0.0)  # the node's clouds follow output_rate
+    reduction = {k: values[k] for k in ("model", "crop", "wall_planes")}
+    config = resolve(scene, **numerics, **output, **reduction, particle_rate=0.0)  # the node's clouds follow output_rate
     rate = config.output.output_rate if values["publish_particles"] else 0.0
     config.output = dataclasses.replace(config.output, particle_rate=rate)
     return scene, config
