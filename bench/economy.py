@@ -11,7 +11,6 @@ time, mean bore velocity over the 6 s behind it against Arnason et al. (2009) an
 GPUSPH at the same dx, the normalised profile against the experiment (0.15 m case), particles
 and wall time (same device).
 """
-import argparse
 import json
 import sys
 from pathlib import Path
@@ -19,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import warp as wp
 
-from series import run_series
+from series import parser, run_series
 
 
 def run(scene_name: str, dx: float, model: str, device: str, out_dir: Path, end_time=None):
@@ -85,19 +84,12 @@ def report(folders, shared) -> str:
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    sub = parser.add_subparsers(dest="command", required=True)
-    p_run = sub.add_parser("run")
+    main_parser, p_run, _ = parser(__doc__, "runs/economy")
     p_run.add_argument("--scene", nargs="+", default=["dambreak2_010", "dambreak2_015"])
     p_run.add_argument("--dx", type=float, default=0.015)
     p_run.add_argument("--models", nargs="+", default=["full", "slab", "2d"])
-    p_run.add_argument("--device", default="cpu")
-    p_run.add_argument("--end-time", type=float, default=None)
-    p_run.add_argument("--out", default="runs/economy")
-    p_rep = sub.add_parser("report")
-    p_rep.add_argument("folders", nargs="+")
 
-    args = parser.parse_args(argv)
+    args = main_parser.parse_args(argv)
     wp.config.log_level = wp.LOG_WARNING
     if args.command == "run":
         for scene in args.scene:

@@ -3,19 +3,18 @@ device; where their probe and force series part (the thesis blamed its fine-spac
 Sections 4.2 and 5.1, on single precision without testing it).
 
     python bench/precision.py run --scene dambreak1_thesis --dx 0.01 [--device cuda:0] [--end-time 1.5] --out DIR
-    python bench/precision.py report DIR
+    python bench/precision.py report DIR [DIR ...]
 
 For each series: the peak (largest |value|) in each precision and their difference, the RMS of
 the difference over the peak, and the first time the two differ by more than 10% of the peak.
 """
-import argparse
 import json
 import sys
 from pathlib import Path
 
 import numpy as np
 
-from series import run_series
+from series import parser, run_series
 
 PRECISIONS = ("float32", "float64")
 
@@ -61,20 +60,13 @@ def report(folder) -> str:
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    sub = parser.add_subparsers(dest="command", required=True)
-    p_run = sub.add_parser("run")
+    main_parser, p_run, _ = parser(__doc__, "runs/precision")
     p_run.add_argument("--scene", default="dambreak1_thesis")
     p_run.add_argument("--dx", type=float, nargs="+", default=[0.04])
-    p_run.add_argument("--device", default="cpu")
-    p_run.add_argument("--end-time", type=float, default=None)
     p_run.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE")
-    p_run.add_argument("--out", default="runs/precision")
-    p_rep = sub.add_parser("report")
-    p_rep.add_argument("folder")
-    args = parser.parse_args(argv)
+    args = main_parser.parse_args(argv)
     if args.command == "report":
-        print(report(args.folder))
+        print("\n".join(report(folder) for folder in args.folders))
         return 0
     import yaml
 

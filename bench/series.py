@@ -4,6 +4,7 @@ scene's output rate into flat named series; what bench/economy.py and bench/prec
 Series names: ``points/<probe>/u`` (x velocity), ``points/<probe>/p``, ``columns/<probe>/u``,
 ``profiles/<probe>/h<k>`` (x velocity at the k-th height), ``gauges/<probe>``, ``wrenches/<body>/fx``.
 """
+import argparse
 import time
 
 import numpy as np
@@ -66,3 +67,17 @@ def run_series(scene_name: str, **settings) -> dict:
             "fluid_particles": built.fluid_particles, "steps": steps, "wall_s": wall,
             "mipps": solver.n * steps / wall / 1e6 if wall > 0 else 0.0, "simulated_s": solver.time,
             "status": status, "series": series}
+
+
+def parser(doc: str, out: str):
+    """(parser, run, report) sub-parsers of a ``run`` / ``report`` bench script: run takes --device,
+    --end-time and --out, report the folders to read."""
+    main = argparse.ArgumentParser(description=doc.split("\n\n")[0])
+    sub = main.add_subparsers(dest="command", required=True)
+    run = sub.add_parser("run")
+    run.add_argument("--device", default="cpu")
+    run.add_argument("--end-time", type=float, default=None)
+    run.add_argument("--out", default=out)
+    report = sub.add_parser("report")
+    report.add_argument("folders", nargs="+")
+    return main, run, report
