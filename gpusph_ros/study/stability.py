@@ -190,7 +190,7 @@ ABBREVIATIONS = {"non_finite": "N", "outside_domain": "O", "density_bounds": "D"
 def chart(rows, path):
     """The stability map: rows kernel x viscosity, columns boundary x density; colour the limit,
     letter the failure past it (N NaN, O out of domain, D density, W wall penetration, C clumping,
-    E energy growth, L neighbour-list overflow), x where even the safe end fails."""
+    E energy growth, L neighbour-list overflow); grey and x where even the safe end fails."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -213,16 +213,18 @@ def chart(rows, path):
                     continue
                 if r[key] is not None:
                     grid[i, j] = r[key]
-                mark = "x" if r[key] is None else ABBREVIATIONS.get(r[failure], "?")
-                ax.text(j, i, mark, ha="center", va="center", color="white" if r[key] is None else "black",
-                        fontsize=8)
-        image = ax.imshow(grid, cmap=cmap, vmin=lo_hi[0], vmax=lo_hi[1], aspect="auto")
+                letter = ABBREVIATIONS.get(r[failure], "?")
+                ax.text(j, i, f"x{letter}" if r[key] is None else letter, ha="center", va="center", fontsize=8,
+                        color="0.3" if r[key] is None else "black")
+        colours = plt.get_cmap(cmap).copy()
+        colours.set_bad("0.88")  # grey: unstable even at the safe end
+        image = ax.imshow(grid, cmap=colours, vmin=lo_hi[0], vmax=lo_hi[1], aspect="auto")
         ax.set_xticks(range(len(xs)), [f"{b}\n{d}" for b, d in xs], rotation=90, fontsize=7)
         ax.set_yticks(range(len(ys)), [f"{k} / {v}" for k, v in ys], fontsize=7)
         ax.set_title(title, fontsize=9)
         fig.colorbar(image, ax=ax, shrink=0.8)
     fig.suptitle("Stability map (letter: how the first unstable value failed; N NaN, O out of domain, D density, "
-                 "W wall penetration, C clumping, E energy growth, L list overflow; x: fails at the safe end)",
+                 "W wall penetration, C clumping, E energy growth, L list overflow; grey, x: fails even at the safe end)",
                  fontsize=9)
     fig.savefig(path, dpi=110)
     plt.close(fig)
