@@ -9,8 +9,9 @@
 - ``crop``: along each horizontal axis, the tank is cut to what a disturbance can reach before the
   end time, a front moving at most 2 sqrt(g H) (the dam-break front speed of shallow-water
   theory, Ritter 1892) from the fluid's vertical faces, probes kept inside; an obstacle disturbs
-  only what has reached it already.
-  A cut becomes a plane wall, which nothing reaches before the end.
+  only what has reached it already. A cut keeps the kind of wall the face it replaces had (a plane
+  meeting a particle wall leaves the corner half-supported: measured, DamBreak 1 at 4 cm leaked
+  through it at t = 0.1 s); nothing reaches it before the end.
 - ``wall_planes``: every wall of boundary particles becomes a particle-less plane (the thesis ran
   DamBreak 2's side walls so; ``sph.boundaries``, planes).
 
@@ -123,17 +124,14 @@ def crop_window(scene: Scene, end_time: float, axis: int) -> tuple:
 def _crop(scene: Scene, end_time: float, dx: float) -> Scene:
     """The scene cut to its crop windows (on whole spacings, so the lattice keeps its place)."""
     lo, hi = [0.0, 0.0, 0.0], list(scene.tank)
-    walls = dict(scene.walls)
     for axis in range(scene.dim - 1):
         a, b = crop_window(scene, end_time, axis)
         a = math.floor(a / dx) * dx
         b = min(scene.tank[axis], math.ceil(b / dx) * dx)
         if a > 0.0:
             lo[axis] = a
-            walls["xy"[axis] + "_min"] = "planes"
         if b < scene.tank[axis]:
             hi[axis] = b
-            walls["xy"[axis] + "_max"] = "planes"
     if lo == [0.0, 0.0, 0.0] and hi == list(scene.tank):
         return scene
 
@@ -144,7 +142,7 @@ def _crop(scene: Scene, end_time: float, dx: float) -> Scene:
         return dataclasses.replace(box, lo=tuple(max(box.lo[k], lo[k]) for k in range(3)),
                                    hi=tuple(min(box.hi[k], hi[k]) for k in range(3)))
 
-    cut = dataclasses.replace(scene, tank=tuple(hi), walls=walls, fluid=[clip(b) for b in scene.fluid if inside(b)],
+    cut = dataclasses.replace(scene, tank=tuple(hi), fluid=[clip(b) for b in scene.fluid if inside(b)],
                               obstacles=[clip(o) for o in scene.obstacles if inside(o)])
     # the builder's tank starts at 0: the cut is built there and moved back by its origin
     local = translate(cut, tuple(-c for c in lo))
