@@ -216,8 +216,7 @@ def chart(rows, path):
                 letter = ABBREVIATIONS.get(r[failure], "?")
                 ax.text(j, i, f"x{letter}" if r[key] is None else letter, ha="center", va="center", fontsize=8,
                         color="0.3" if r[key] is None else "black")
-        colours = plt.get_cmap(cmap).copy()
-        colours.set_bad("0.88")  # grey: unstable even at the safe end
+        colours = plt.get_cmap(cmap).with_extremes(bad="0.88")  # grey: unstable even at the safe end
         image = ax.imshow(grid, cmap=colours, vmin=lo_hi[0], vmax=lo_hi[1], aspect="auto")
         ax.set_xticks(range(len(xs)), [f"{b}\n{d}" for b, d in xs], rotation=90, fontsize=7)
         ax.set_yticks(range(len(ys)), [f"{k} / {v}" for k, v in ys], fontsize=7)
