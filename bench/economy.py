@@ -1,7 +1,8 @@
 """Scene economy on DamBreak 2: the full 3D flume, the thin periodic slab and the 2D section at the
 same dx, each run to the scene's end time; what each costs and what each measures.
 
-    python bench/economy.py run --scene dambreak2_010 --dx 0.015 --models full slab 2d [--device cuda:0] --out DIR
+    python bench/economy.py run --scene dambreak2_010 --dx 0.015 --models full slab 2d [--device cuda:0]
+        [--set kernel=wendland viscosity=sps] --out DIR
     python bench/economy.py report DIR [DIR ...]
 
 ``run`` needs only the solver (no ROS): per model it writes DIR/<scene>_<model>_<dx>.json with the
@@ -18,11 +19,10 @@ from pathlib import Path
 import numpy as np
 import warp as wp
 
-from series import parser, run_series
+from series import parser, run_series, settings
 
 
-def run(scene_name: str, dx: float, model: str, device: str, out_dir: Path, end_time=None):
-    extra = {"end_time": end_time} if end_time else {}
+def run(scene_name: str, dx: float, model: str, device: str, out_dir: Path, extra: dict):
     record = run_series(scene_name, dx=dx, model=model, device=device, **extra)
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / f"{scene_name}_{model}_{dx:g}.json").write_text(json.dumps(record))
@@ -94,7 +94,7 @@ def main(argv=None):
     if args.command == "run":
         for scene in args.scene:
             for model in args.models:
-                run(scene, args.dx, model, args.device, Path(args.out), args.end_time)
+                run(scene, args.dx, model, args.device, Path(args.out), settings(args))
         return 0
     from gpusph_ros.analysis.reference import shared_dir
 

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from series import parser, run_series
+from series import parser, run_series, settings
 
 PRECISIONS = ("float32", "float64")
 
@@ -63,16 +63,11 @@ def main(argv=None):
     main_parser, p_run, _ = parser(__doc__, "runs/precision")
     p_run.add_argument("--scene", default="dambreak1_thesis")
     p_run.add_argument("--dx", type=float, nargs="+", default=[0.04])
-    p_run.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE")
     args = main_parser.parse_args(argv)
     if args.command == "report":
         print("\n".join(report(folder) for folder in args.folders))
         return 0
-    import yaml
-
-    extra = {k: yaml.safe_load(v) for k, v in (s.split("=", 1) for s in args.set)}
-    if args.end_time:
-        extra["end_time"] = args.end_time
+    extra = settings(args)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     for dx in args.dx:

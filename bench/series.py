@@ -78,6 +78,17 @@ def parser(doc: str, out: str):
     run.add_argument("--device", default="cpu")
     run.add_argument("--end-time", type=float, default=None)
     run.add_argument("--out", default=out)
+    run.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE", help="more run settings")
     report = sub.add_parser("report")
     report.add_argument("folders", nargs="+")
     return main, run, report
+
+
+def settings(args) -> dict:
+    """The run settings of ``--set`` and ``--end-time``."""
+    import yaml
+
+    out = {k: yaml.safe_load(v) for k, v in (item.split("=", 1) for item in args.set)}
+    if args.end_time:
+        out["end_time"] = args.end_time
+    return out
