@@ -1,6 +1,8 @@
 """Scene reductions (gpusph_ros.scenes.reduce): the 2D section and the periodic slab of a flow
 uniform across y carry the same water per metre of width as the full 3D model, cropping keeps
 what a front can reach, and a bore modelled all three ways gives the same probe readings."""
+import dataclasses
+
 import numpy as np
 import pytest
 import yaml
@@ -50,6 +52,10 @@ def test_reductions_that_do_not_fit_are_refused_with_the_reason():
     with pytest.raises(ConfigError) as err:
         resolve(db2, model="3d")
     assert err.value.field == "model" and "full, slab, 2d" in str(err.value)
+    db2_planes = dataclasses.replace(db2, walls={face: "planes" for face in db2.walls})
+    options = reduce.applicable(db2_planes, 13.0, 0.05)
+    assert set(options["apply"]) == {"slab", "2d"} and set(options["not applicable"]) == {"crop", "wall_planes"}
+    assert set(reduce.applicable(db2, 13.0, 0.05)["apply"]) == {"slab", "2d", "wall_planes", "2d+wall_planes"}
     options = reduce.applicable(db1, 3.0, 0.02)
     assert set(options["apply"]) == {"wall_planes"}
     assert "nothing lies out of reach" in options["not applicable"]["crop"]

@@ -206,7 +206,7 @@ def applicable(scene: Scene, end_time: float, dx: float) -> dict:
         out["wall_planes"] = Reduction(wall_planes=True)
     else:
         skipped["wall_planes"] = "every wall is a plane already"
-    if len(out) > 1 and "2d" in out:
-        out["2d+" + "+".join(k for k in ("crop", "wall_planes") if k in out)] = Reduction(
-            model="2d", crop="crop" in out, wall_planes="wall_planes" in out)
+    extras = [k for k in ("crop", "wall_planes") if k in out]
+    if "2d" in out and extras:  # the cheapest: every reduction that applies at once
+        out["2d+" + "+".join(extras)] = Reduction(model="2d", crop="crop" in out, wall_planes="wall_planes" in out)
     return {"apply": out, "not applicable": skipped}

@@ -7,7 +7,7 @@ each model lives in its own module and is only combined here.
 Step (predictor-corrector as GPUSPH, Herault et al. 2010):
   neighbours(x_n) -> eos -> [sps] -> interact(n) -> choose_dt
   -> integrate(dt/2) -> eos -> [sps] -> interact(n+1/2) -> integrate(dt) into the candidate state
-  -> health(candidate) -> [energy(candidate) -> energy_check, every few steps]
+  -> health(candidate) -> [census(candidate) -> census_check, every few steps]
   -> commit (only if healthy) -> tick -> [shepard every N steps]
 The committed state is never overwritten by a candidate that failed a health check.
 
@@ -379,16 +379,15 @@ def build(scalar):
     def census_check(p: Params, total: wp.array(dtype=wp.float64), count: wp.array(dtype=wp.int32),
                      fail: wp.array(dtype=wp.int32)):
         """total = [candidate's energy, energy at the start (or +inf before the first check), the
-        largest seen, the largest clumped fraction seen]: flags energy_growth when the candidate
-        exceeds the start by the slack, clumping when too many particles have clumped."""
+        largest clumped fraction seen]: flags energy_growth when the candidate exceeds the start by
+        the slack, clumping when too many particles have clumped."""
         e = total[0]
         if total[1] == wp.float64(1.0e300):
             total[1] = e
-        total[2] = wp.max(total[2], e)
         if p.energy_slack > wp.float64(0.0) and e > total[1] + p.energy_slack:
             fail[ENERGY_GROWTH] = 0
         fraction = wp.float64(count[0]) / wp.float64(p.n_fluid)
-        total[3] = wp.max(total[3], fraction)
+        total[2] = wp.max(total[2], fraction)
         if p.clump_r > scalar(0.0) and fraction > p.clump_fraction:
             fail[CLUMPING] = count[1]
         count[0] = 0  # ready for the next census

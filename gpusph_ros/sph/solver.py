@@ -198,9 +198,9 @@ class Solver:
         self._solid_lo = arr(np.asarray([lo for lo, _ in solids], dtype=np.float64), v)
         self._solid_hi = arr(np.asarray([hi for _, hi in solids], dtype=np.float64), v)
         self._fail = arr(np.full(passes.N_CHECKS, passes.NO_FAILURE, dtype=np.int32), wp.int32)
-        # candidate's energy, energy at the start, the largest seen, the largest clumped fraction seen
+        # candidate's energy, energy at the start, the largest clumped fraction seen
         # (passes.census_check); clumped fluid particles and the first of them
-        self._energy_sum = arr(np.array([0.0, _NO_ENERGY, -_NO_ENERGY, 0.0]), wp.float64)
+        self._energy_sum = arr(np.array([0.0, _NO_ENERGY, 0.0]), wp.float64)
         self._clumped = wp.zeros(n, dtype=wp.int32, device=dev)
         self._clump_count = arr(np.array([0, passes.NO_FAILURE], dtype=np.int32), wp.int32)
         self._clock = wp.zeros(4, dtype=wp.float64, device=dev)  # t, dt, stable dt, time of a failed step
@@ -288,7 +288,7 @@ class Solver:
                                   f"({self.config.energy_growth_ratio:g} M g H = {self._energy_slack:.3g} J allowed)")
             detail = ""
             if check == "clumping":
-                detail = (f"{self._energy_sum.numpy()[3]:.1%} of the fluid particles have a neighbour closer than "
+                detail = (f"{self._energy_sum.numpy()[2]:.1%} of the fluid particles have a neighbour closer than "
                           f"{self.config.clump_ratio:g} dx (more than {self.config.clump_fraction:.0%} allowed)")
             raise HealthError(check, int(steps[1]), float(clock[3]), int(idx), detail)
         overflow = int(self.neighbours.overflow.numpy()[0])
