@@ -6,10 +6,10 @@ from setuptools import find_packages, setup
 package_name = 'gpusph_ros'
 
 
-def config_files():
-    """Every file under config/, installed to share/gpusph_ros/config keeping sub-folders."""
+def share_files(*folders):
+    """Every file under each folder, installed to share/gpusph_ros/<folder> keeping sub-folders."""
     entries = {}
-    for path in glob('config/**/*', recursive=True):
+    for path in (p for folder in folders for p in glob(folder + '/**/*', recursive=True)):
         if os.path.isfile(path):
             target = os.path.join('share', package_name, os.path.dirname(path))
             entries.setdefault(target, []).append(path)
@@ -23,7 +23,7 @@ setup(
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
-        *config_files(),
+        *share_files('config', 'data'),
     ],
     install_requires=['setuptools'],
     zip_safe=True,

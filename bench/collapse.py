@@ -12,12 +12,12 @@ import warp as wp
 
 from gpusph_ros.scenes.build import build
 from gpusph_ros.scenes.schema import load_scene
+from gpusph_ros.share import data_dir
 from gpusph_ros.sph import Solver
 
 SCENE = load_scene("collapse_2d")
 WIDTH = SCENE.fluid[0].hi[0]
-TABLE = (Path(__file__).resolve().parents[2] / "shared/data/martin_moyce_1952_collapse/ocellaris/"
-         "martin_moyce_1952_table2_surge_front.txt")
+TABLE = data_dir("martin_moyce_1952_collapse/ocellaris") / "martin_moyce_1952_table2_surge_front.txt"
 
 
 def main():

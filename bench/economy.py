@@ -32,7 +32,7 @@ def run(scene_name: str, dx: float, model: str, device: str, out_dir: Path, extr
     return record
 
 
-def metrics(record: dict, shared):
+def metrics(record: dict, data):
     from gpusph_ros.analysis import metrics as M
     from gpusph_ros.analysis import reference as R
 
@@ -43,15 +43,15 @@ def metrics(record: dict, shared):
     mean, covered = M.mean_behind(t, u, arrival)
     heights = sorted((k for k in series if k.startswith("profiles/profile/")), key=lambda k: int(k.rsplit("h", 1)[1]))
     normalised = [M.mean_behind(t, np.asarray(series[k]), arrival)[0] / mean for k in heights]
-    experiment = R.experiment_value(shared, case, "mean_bore_velocity_6s_window")
+    experiment = R.experiment_value(data, case, "mean_bore_velocity_6s_window")
     gpusph = None
     for scenario in (1, 2, 3):
-        value = R.gpusph_value(shared, f"{case}_mean_velocity.csv", "mean_velocity_m_s", scenario, record["dx"],
+        value = R.gpusph_value(data, f"{case}_mean_velocity.csv", "mean_velocity_m_s", scenario, record["dx"],
                                0.10 if case.endswith("010") else 0.15)
         gpusph = gpusph if value is None else (value if gpusph is None else min(gpusph, value, key=lambda v: abs(v - experiment)))
     profile_error = None
     if case.endswith("015"):
-        exp = R.experiment_profile(shared)
+        exp = R.experiment_profile(data)
         n = min(len(exp[1]), len(normalised))
         profile_error = float(np.sqrt(np.mean((np.asarray(normalised[:n]) - exp[1][:n]) ** 2)))
     return {"arrival_s": arrival, "mean_velocity": mean, "covered_s": covered, "experiment": experiment,
@@ -60,7 +60,7 @@ def metrics(record: dict, shared):
             "profile": normalised, "profile_rms": profile_error}
 
 
-def report(folders, shared) -> str:
+def report(folders, data) -> str:
     records = [json.loads(p.read_text()) for folder in folders for p in sorted(Path(folder).glob("dambreak2_*.json"))]
     order = {"full": 0, "slab": 1, "2d": 2}
     records.sort(key=lambda r: (r["scene"], r["dx"], r["device"], order.get(r["model"], 9)))
@@ -69,7 +69,7 @@ def report(folders, shared) -> str:
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in records:
         done = r["status"] == "completed"
-        m = metrics(r, shared) if done or len(r["series"]["t"]) > 20 else None
+        m = metrics(r, data) if done or len(r["series"]["t"]) > 20 else None
 
         def f(value, spec):
             return "-" if value is None else format(value, spec)
@@ -96,9 +96,9 @@ def main(argv=None):
             for model in args.models:
                 run(scene, args.dx, model, args.device, Path(args.out), settings(args))
         return 0
-    from gpusph_ros.analysis.reference import shared_dir
+    from gpusph_ros.analysis.reference import data_dir
 
-    print(report(args.folders, shared_dir()))
+    print(report(args.folders, data_dir()))
     return 0
 
 

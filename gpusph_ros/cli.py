@@ -1,7 +1,7 @@
 """Headless entry points.
 
     gpusph-run SCENE [--run-config NAME|FILE ...] [--set key=value ...] --out DIR
-    gpusph-analyze DIR [--charts DIR] [--shared DIR]     (a recording, or a study's results folder)
+    gpusph-analyze DIR [--charts DIR] [--reference DIR]     (a recording, or a study's results folder)
     gpusph-sweep STUDY [--scheduler ADDRESS] [--out DIR]
     gpusph-plan SCENE [--run-config NAME|FILE ...] [--set key=value ...] [--no-reductions]
     gpusph-stability [--out DIR] [--workers N] [--device DEV] [--kernels ...] ... [--report]
@@ -79,7 +79,7 @@ def analyze_main(argv=None):
                                      description="The thesis's metrics of a recording beside the experiment and GPUSPH.")
     parser.add_argument("recording", help="bag directory written by gpusph-run or sim_node")
     parser.add_argument("--charts", help="where metrics.json and the PNG charts go (default: DIR/analysis)")
-    parser.add_argument("--shared", help="the shared reference folder (default: $GPUSPH_ROS_SHARED or ../shared)")
+    parser.add_argument("--reference", help="a reference folder laid out as the package's data/ (default: the package's own)")
     parser.add_argument("--no-charts", action="store_true")
     args = parser.parse_args(argv)
     from pathlib import Path
@@ -89,7 +89,7 @@ def analyze_main(argv=None):
     if (Path(args.recording) / "results.csv").is_file():
         return _analyze_study(Path(args.recording))
     try:
-        rep, curves = R.analyse(args.recording, Path(args.shared) if args.shared else None)
+        rep, curves = R.analyse(args.recording, Path(args.reference) if args.reference else None)
     except (FileNotFoundError, KeyError) as err:
         print(f"gpusph-analyze: {err}", file=sys.stderr)
         return 1
@@ -106,14 +106,14 @@ def analyze_main(argv=None):
 def _analyze_study(folder) -> int:
     import json
 
-    from .analysis.reference import shared_dir
+    from .analysis.reference import data_dir
     from .study import charts, table
 
     rows = table.read(folder / "results.csv")
     metrics = json.loads((folder / "study.json").read_text())["metrics"]
     print(table.thesis_tables(rows, metrics))
     print("\n" + table.headline(rows, metrics))
-    written = charts.write(rows, metrics, folder / "charts", shared_dir())
+    written = charts.write(rows, metrics, folder / "charts", data_dir())
     print("".join(f"\nchart: {w}" for w in written))
     return 0
 
@@ -130,7 +130,7 @@ def sweep_main(argv=None):
     import warp as wp
 
     wp.config.log_level = wp.LOG_WARNING
-    from .analysis.reference import shared_dir
+    from .analysis.reference import data_dir
     from .sph import ConfigError
     from .study import charts, table
     from .study.schema import load_study, with_out
@@ -147,7 +147,7 @@ def sweep_main(argv=None):
     (study.out / "study.json").write_text(json.dumps({"name": study.name, "metrics": study.metrics,
                                                       "cases": [c.name for c in study.cases()]}, indent=1))
     rows = sweep(study, scheduler=args.scheduler, progress=lambda line: print(line, flush=True))
-    written = table.write(rows, study.out) + charts.write(rows, study.metrics, study.out / "charts", shared_dir())
+    written = table.write(rows, study.out) + charts.write(rows, study.metrics, study.out / "charts", data_dir())
     print(table.thesis_tables(rows, study.metrics))
     print("\n" + table.headline(rows, study.metrics))
     print("".join(f"\nwrote {w}" for w in written))

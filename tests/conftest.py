@@ -1,4 +1,4 @@
-"""Shared test set-up: quiet Warp, the shared reference data, small tank builders."""
+"""Shared test set-up: quiet Warp, the package's reference data, small tank builders."""
 from pathlib import Path
 
 import numpy as np
@@ -7,15 +7,18 @@ import warp as wp
 
 wp.config.log_level = wp.LOG_WARNING
 
+from gpusph_ros.analysis.reference import data_dir
+
 REPO = Path(__file__).resolve().parents[1]
-SHARED = REPO.parent / "shared"
 
 
 @pytest.fixture(scope="session")
-def shared_dir() -> Path:
-    if not SHARED.is_dir():
-        pytest.fail(f"the shared reference material is missing: expected it at {SHARED}")
-    return SHARED
+def reference_data() -> Path:
+    """The package's own data/ folder (no ../shared needed)."""
+    found = data_dir()
+    if found is None:
+        pytest.fail("the package's reference data (data/thesis_2011) is missing from this checkout or install")
+    return found
 
 
 def hydrostatic_errors(snap: dict, dim: int, h: float, depth: float, rho0: float, g: float, periodic,

@@ -43,30 +43,28 @@ def test_forward_return_and_bore_arrival():
     assert mean == pytest.approx(0.55, rel=0.01) and covered == pytest.approx(6.0, abs=0.05)
 
 
-def test_gpusph_lookup_by_scenario_and_dx(shared_dir):
+def test_gpusph_lookup_by_scenario_and_dx(reference_data):
     assert thesis_scenario("quadratic", "sps") == (1, True)
     assert thesis_scenario("quadratic", "laminar") == (2, True)
     assert thesis_scenario("cubic_spline", "artificial") == (3, False)
     assert thesis_scenario("wendland", "sps") == (None, False)
     # thesis Table 8, scenario 3 at 2.0e-2 m: 0.63 m/s; Table 25, 0.10 m case, scenario 1 at 1.0e-2 m: 0.52 m/s
-    assert gpusph_value(shared_dir, "dambreak1_peak_velocity.csv", "peak_velocity_m_s", 3, 0.02) == 0.63
-    assert gpusph_value(shared_dir, "dambreak2_010_mean_velocity.csv", "mean_velocity_m_s", 1, 0.01, 0.1) == 0.52
-    assert gpusph_value(shared_dir, "dambreak1_peak_velocity.csv", "peak_velocity_m_s", 3, 0.025) is None
+    assert gpusph_value(reference_data, "dambreak1_peak_velocity.csv", "peak_velocity_m_s", 3, 0.02) == 0.63
+    assert gpusph_value(reference_data, "dambreak2_010_mean_velocity.csv", "mean_velocity_m_s", 1, 0.01, 0.1) == 0.52
+    assert gpusph_value(reference_data, "dambreak1_peak_velocity.csv", "peak_velocity_m_s", 3, 0.025) is None
 
 
-def test_dambreak2_report_from_a_recorded_synthetic_bore(tmp_path, shared_dir):
-    """A recording of the dambreak2_015 scene's topics carrying a known bore: arrival at the
-    steepest rise, the 6 s mean, the profile normalised by it, and GPUSPH's and the experiment's
-    values beside them (thesis Tables 29-36)."""
-    from gpusph_ros.analysis.report import analyse, table
+def record_synthetic_bore(path):
+    """A recording of the dambreak2_015 scene's topics carrying a known bore (0.8 m/s from 4.45 s),
+    as a run at dx = 1 cm with the quadratic kernel and SPS (thesis scenario 1) would write it."""
     from gpusph_ros.ros.messages import clock, measurement_messages
     from gpusph_ros.ros.recording import BagRecorder
     from gpusph_ros.scenes.schema import load_scene
 
     scene = load_scene("dambreak2_015")
     heights = scene.probes[1].heights
-    rec = BagRecorder(tmp_path / "bore", {"scene_name": scene.name, "scene": scene.text, "dx": 0.01,
-                                          "kernel": "quadratic", "viscosity": "sps", "run_config": "{dx: 0.01}"})
+    rec = BagRecorder(path, {"scene_name": scene.name, "scene": scene.text, "dx": 0.01,
+                             "kernel": "quadratic", "viscosity": "sps", "run_config": "{dx: 0.01}"})
     for t in np.arange(0.0, 12.05, 0.1):
         u = 0.8 * (1 + np.tanh((t - 4.45) / 0.1)) / 2
         sample = {"points": {}, "columns": {"bore": {"vel": (u, 0.0, 0.0), "count": 30}},
@@ -77,7 +75,16 @@ def test_dambreak2_report_from_a_recorded_synthetic_bore(tmp_path, shared_dir):
         for topic, msg in measurement_messages(t, sample, scene):
             rec.write(topic, msg, t)
     rec.close({"status": "completed"})
-    report, _ = analyse(tmp_path / "bore", shared_dir)
+    return heights
+
+
+def test_dambreak2_report_from_a_recorded_synthetic_bore(tmp_path, reference_data):
+    """Arrival at the steepest rise, the 6 s mean, the profile normalised by it, and GPUSPH's and
+    the experiment's values beside them (thesis Tables 29-36)."""
+    from gpusph_ros.analysis.report import analyse, table
+
+    heights = record_synthetic_bore(tmp_path / "bore")
+    report, _ = analyse(tmp_path / "bore", reference_data)
     values = {m["key"]: m for m in report["metrics"]}
     assert values["bore_arrival"]["value"] == pytest.approx(4.5)
     assert values["bore_arrival"]["gpusph"] == 4.5  # Table 32, scenario 1, 1.0e-2 m

@@ -21,8 +21,8 @@ CASES = [("float32", {}), ("float64", {}), ("float32", THESIS_SCENARIO_3)]
 
 
 @pytest.mark.parametrize("precision, numerics", CASES, ids=["defaults-float32", "defaults-float64", "thesis-scenario-3"])
-def test_surge_front_matches_martin_moyce(shared_dir, precision, numerics):
-    table = np.loadtxt(shared_dir / "data/martin_moyce_1952_collapse/ocellaris/martin_moyce_1952_table2_surge_front.txt")
+def test_surge_front_matches_martin_moyce(reference_data, precision, numerics):
+    table = np.loadtxt(reference_data / "martin_moyce_1952_collapse/ocellaris/martin_moyce_1952_table2_surge_front.txt")
     points = table[(table[:, 0] >= 1.0) & (table[:, 0] <= 2.55)]
     model = build(SCENE, dx=A / 30, precision=precision, **numerics)
     cfg, parts = model.config, model.particles

@@ -41,8 +41,8 @@ def test_csv_and_parquet_hold_every_row_and_column(tmp_path):
     assert pt.column("wall_time_s").to_pylist() == [r["wall_time_s"] for r in ROWS]
 
 
-def test_error_against_dx_has_ours_and_gpusphs_series_per_scenario(shared_dir):
-    fig = charts.error_vs_dx(ROWS, "peak_velocity", shared_dir)
+def test_error_against_dx_has_ours_and_gpusphs_series_per_scenario(reference_data):
+    fig = charts.error_vs_dx(ROWS, "peak_velocity", reference_data)
     lines = {line.get_label(): line for line in fig.axes[0].get_lines()}
     assert set(lines) == {"ours: dambreak1_thesis, s1", "ours: dambreak1_thesis, s3", "GPUSPH (thesis scenario 1)",
                           "GPUSPH (thesis scenario 3)"}

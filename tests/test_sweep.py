@@ -31,7 +31,7 @@ def cluster():
         yield c
 
 
-def test_a_four_case_study_with_a_failing_case_completes_and_is_tabulated(cluster, tmp_path, shared_dir):
+def test_a_four_case_study_with_a_failing_case_completes_and_is_tabulated(cluster, tmp_path, reference_data):
     # c0 = 0.3 m/s is far below 10 sqrt(g H): the density check stops those runs at once
     study = _study(tmp_path, 0.2, [0.0, 0.3])
     lines = []
@@ -49,7 +49,7 @@ def test_a_four_case_study_with_a_failing_case_completes_and_is_tabulated(cluste
         assert r["peak_velocity_experiment"] == 2.21 and r["peak_velocity_error_pct"] is not None
         assert r["device"] == "cpu" and r["precision"] == "float32"
         assert (tmp_path / "out/cases" / r["case"] / "bag/metadata.yaml").is_file()
-    written = table.write(rows, study.out) + charts.write(rows, study.metrics, study.out / "charts", shared_dir)
+    written = table.write(rows, study.out) + charts.write(rows, study.metrics, study.out / "charts", reference_data)
     assert all(p.is_file() for p in written) and len(written) == 2 + 3 * 3  # a table twice, 3 charts a metric
     # a rerun runs nothing: every case has finished (completed or failed)
     lines.clear()

@@ -1,26 +1,25 @@
-"""The comparison material in ../shared: the thesis's GPUSPH results (reference/thesis_2011), the
-experimental values behind its percent errors, and the digitised experimental series (data/).
-
-Found through $GPUSPH_ROS_SHARED, else ../shared beside this checkout or the working directory.
+"""The comparison material the package carries in data/ (share.data_dir): the thesis's GPUSPH
+results (thesis_2011/), the experimental values behind its percent errors, and the digitised
+experimental series. Every function takes that folder (``data``) and answers None when it is None.
 """
 import csv
-import os
 from pathlib import Path
 
 import numpy as np
 
-THESIS = Path("reference/thesis_2011")
+from ..share import data_dir as _package_data
+
+THESIS = Path("thesis_2011")
 SCENARIOS = {1: "quadratic kernel + SPS", 2: "quadratic kernel, no SPS", 3: "cubic spline + SPS"}
 
 
-def shared_dir():
-    """The shared folder, or None when it is not there (the analysis then reports our numbers alone)."""
-    candidates = [os.environ.get("GPUSPH_ROS_SHARED"), Path(__file__).resolve().parents[3] / "shared",
-                  Path.cwd().parent / "shared", Path.cwd() / "shared"]
-    for c in candidates:
-        if c and (Path(c) / THESIS).is_dir():
-            return Path(c)
-    return None
+def data_dir():
+    """The package's reference folder, or None when an install lost it (the analysis then says so
+    and reports our numbers alone)."""
+    try:
+        return _package_data(str(THESIS)).parent
+    except FileNotFoundError:
+        return None
 
 
 def thesis_scenario(kernel: str, viscosity: str):
@@ -33,16 +32,16 @@ def thesis_scenario(kernel: str, viscosity: str):
     return None, False
 
 
-def _rows(shared, name):
-    with open(shared / THESIS / name, newline="") as f:
+def _rows(data, name):
+    with open(data / THESIS / name, newline="") as f:
         return list(csv.DictReader(f))
 
 
-def gpusph_value(shared, table: str, column: str, scenario: int, dx: float, upper_depth=None):
+def gpusph_value(data, table: str, column: str, scenario: int, dx: float, upper_depth=None):
     """GPUSPH's value in ``table`` for the scenario at spacing ``dx`` (matched to 0.1 mm), or None."""
-    if shared is None or scenario is None:
+    if data is None or scenario is None:
         return None
-    for row in _rows(shared, table):
+    for row in _rows(data, table):
         if int(row["scenario"]) != scenario or abs(float(row["dx_m"]) - dx) > 1e-4:
             continue
         if upper_depth is not None and abs(float(row["upper_depth_m"]) - upper_depth) > 1e-6:
@@ -51,48 +50,48 @@ def gpusph_value(shared, table: str, column: str, scenario: int, dx: float, uppe
     return None
 
 
-def experiment_value(shared, case: str, quantity: str):
-    if shared is None:
+def experiment_value(data, case: str, quantity: str):
+    if data is None:
         return None
-    for row in _rows(shared, "experiment_reference.csv"):
+    for row in _rows(data, "experiment_reference.csv"):
         if row["case"] == case and row["quantity"] == quantity:
             return float(row["value"])
     return None
 
 
-def experiment_series(shared, name: str):
+def experiment_series(data, name: str):
     """A digitised Yeh & Petroff series, (t, value) sorted by time: 'velocity' or 'force'."""
-    if shared is None:
+    if data is None:
         return None
-    path = shared / "data/yeh_petroff_dambreak_column/pysph" / f"yeh_and_petroff_{'v' if name == 'velocity' else 'force'}_data.txt"
+    path = data / "yeh_petroff_dambreak_column/pysph" / f"yeh_and_petroff_{'v' if name == 'velocity' else 'force'}_data.txt"
     data = np.loadtxt(path, comments="#")
     data = data[np.argsort(data[:, 0], kind="stable")]
     return data[:, 0], data[:, 1]
 
 
-def experiment_profile(shared):
+def experiment_profile(data):
     """Measured normalised velocity profile of the 0.15 m case (thesis Table 33): heights [m], u/U."""
-    if shared is None:
+    if data is None:
         return None
-    rows = _rows(shared, "dambreak2_015_profile_experiment.csv")
+    rows = _rows(data, "dambreak2_015_profile_experiment.csv")
     return (np.array([float(r["height_mm"]) / 1000 for r in rows]),
             np.array([float(r["normalized_velocity"]) for r in rows]))
 
 
-def gpusph_profile(shared, scenario, dx):
+def gpusph_profile(data, scenario, dx):
     """GPUSPH's normalised profile at the Table 33 heights for the scenario and dx, or None."""
-    if shared is None or scenario is None:
+    if data is None or scenario is None:
         return None
-    rows = [r for r in _rows(shared, "dambreak2_015_profile_normalized.csv")
+    rows = [r for r in _rows(data, "dambreak2_015_profile_normalized.csv")
             if int(r["scenario"]) == scenario and abs(float(r["dx_m"]) - dx) < 1e-4]
     if not rows:
         return None
     return (np.array([float(r["height_mm"]) / 1000 for r in rows]), np.array([float(r["normalized_velocity"]) for r in rows]))
 
 
-def gpusph_series(shared, table: str, column: str, scenario: int):
+def gpusph_series(data, table: str, column: str, scenario: int):
     """(dx, value) arrays of every GPUSPH run of ``scenario`` in ``table`` (thesis order: fine to coarse)."""
-    if shared is None or scenario is None:
+    if data is None or scenario is None:
         return np.array([]), np.array([])
-    rows = [r for r in _rows(shared, table) if int(r["scenario"]) == scenario]
+    rows = [r for r in _rows(data, table) if int(r["scenario"]) == scenario]
     return np.array([float(r["dx_m"]) for r in rows]), np.array([float(r[column]) for r in rows])

@@ -50,14 +50,14 @@ def _x(series, component="v"):
     return series["t"], series[component][:, 0]
 
 
-def dambreak1(rec, meta, shared, scenario, dx, same_case):
+def dambreak1(rec, meta, data, scenario, dx, same_case):
     out, curves = [], {}
-    gp = (lambda table, column: R.gpusph_value(shared, table, column, scenario, dx)) if same_case else (lambda *a: None)
+    gp = (lambda table, column: R.gpusph_value(data, table, column, scenario, dx)) if same_case else (lambda *a: None)
     t, u = M.moving_average(*_x(rec.topic("probes/velocity")))
-    exp_v = R.experiment_series(shared, "velocity")
+    exp_v = R.experiment_series(data, "velocity")
     t_ref = M.peak(*M.moving_average(*exp_v))[0] if exp_v else 0.0
     t_al = M.align_to(t, u, t_ref)
-    out.append(_metric("peak_velocity", M.peak(t, u)[1], R.experiment_value(shared, "dambreak1", "peak_velocity_at_probe"),
+    out.append(_metric("peak_velocity", M.peak(t, u)[1], R.experiment_value(data, "dambreak1", "peak_velocity_at_probe"),
                        gp("dambreak1_peak_velocity.csv", "peak_velocity_m_s")))
     if exp_v:
         first = exp_v[0] < 0.7  # the thesis used the first group of points only (4.2.1)
@@ -65,9 +65,9 @@ def dambreak1(rec, meta, shared, scenario, dx, same_case):
                            gp("dambreak1_velocity_rms.csv", "rms_error_m_s"),
                            note="experimental scatter 0.39 m/s"))
     curves["velocity"] = (t_al, u, exp_v)
-    exp_f = R.experiment_series(shared, "force")
+    exp_f = R.experiment_series(data, "force")
     f_ref = M.peak(*M.moving_average(*exp_f))[0] if exp_f else 0.0
-    f_exp_peak = R.experiment_value(shared, "dambreak1", "peak_force_on_obstruction")
+    f_exp_peak = R.experiment_value(data, "dambreak1", "peak_force_on_obstruction")
     body = next(iter(meta.get("bodies") or {"obstruction": 0}))
     forces = {}
     for offset, key, table in ((0.0, "peak_force_at_wall", "dambreak1_peak_force_at_wall.csv"),
@@ -94,18 +94,18 @@ def dambreak1(rec, meta, shared, scenario, dx, same_case):
     return out, curves
 
 
-def dambreak2(rec, meta, shared, scenario, dx, upper):
+def dambreak2(rec, meta, data, scenario, dx, upper):
     out, curves = [], {}
     t, u = _x(rec.topic("probes/bore"))
     arrival = M.bore_arrival(t, u)
     mean, covered = M.mean_behind(t, u, arrival)
     case = f"dambreak2_{int(round(upper * 100)):03d}"
     table = f"{case}_mean_velocity.csv"
-    out.append(_metric("bore_arrival", arrival, None, R.gpusph_value(shared, f"{case}_bore_arrival.csv",
+    out.append(_metric("bore_arrival", arrival, None, R.gpusph_value(data, f"{case}_bore_arrival.csv",
                                                                      "arrival_time_s", scenario, dx, upper)))
     note = "" if covered >= M.BORE_WINDOW - 0.15 else f"the record covers only {covered:.1f} s behind the bore"
-    out.append(_metric("mean_velocity", mean, R.experiment_value(shared, case, "mean_bore_velocity_6s_window"),
-                       R.gpusph_value(shared, table, "mean_velocity_m_s", scenario, dx, upper), note=note))
+    out.append(_metric("mean_velocity", mean, R.experiment_value(data, case, "mean_bore_velocity_6s_window"),
+                       R.gpusph_value(data, table, "mean_velocity_m_s", scenario, dx, upper), note=note))
     profile = []
     k = 0
     while True:
@@ -115,8 +115,8 @@ def dambreak2(rec, meta, shared, scenario, dx, upper):
             break
         profile.append(M.mean_behind(tp, up, arrival)[0] / mean if mean else float("nan"))
         k += 1
-    exp_p = R.experiment_profile(shared) if case == "dambreak2_015" else None
-    gp_p = R.gpusph_profile(shared, scenario, dx) if case == "dambreak2_015" else None
+    exp_p = R.experiment_profile(data) if case == "dambreak2_015" else None
+    gp_p = R.gpusph_profile(data, scenario, dx) if case == "dambreak2_015" else None
     for j, value in enumerate(profile):
         key = f"profile_{'ABCDEF'[j] if j < 6 else j}"
         e = float(exp_p[1][j]) if exp_p is not None and j < len(exp_p[1]) else None
@@ -129,11 +129,12 @@ def dambreak2(rec, meta, shared, scenario, dx, upper):
     return out, curves
 
 
-def analyse(path, shared=None) -> dict:
-    """Metrics of the recording at ``path`` (a bag directory) as a JSON-ready dict, plus curves."""
+def analyse(path, data=None) -> dict:
+    """Metrics of the recording at ``path`` (a bag directory) as a JSON-ready dict, plus curves.
+    ``data``: the reference folder (default: the package's own, R.data_dir())."""
     rec = read(path)
     meta = rec.metadata
-    shared = shared or R.shared_dir()
+    data = data or R.data_dir()
     scene = yaml.safe_load(meta.get("scene", "")) or {}
     name = meta.get("scene_name", scene.get("name", "?"))
     run = meta.get("run_config") or {}
@@ -143,16 +144,16 @@ def analyse(path, shared=None) -> dict:
               "viscosity": meta.get("viscosity"), "boundary": meta.get("boundary"), "precision": meta.get("precision"),
               "device": meta.get("device"), "particles": int(meta.get("particles", 0)),
               "fluid_particles": int(meta.get("fluid_particles", 0)), "result": rec.result,
-              "complete": rec.complete, "shared": str(shared) if shared else None,
+              "complete": rec.complete, "reference_data": str(data) if data else None,
               "gpusph_scenario": scenario, "gpusph_scenario_exact": exact,
               "covers_until": max(rec.clock) if rec.clock else 0.0}
     if name.startswith("dambreak1"):
-        rows, curves = dambreak1(rec, meta, shared, scenario, dx, same_case=(name == "dambreak1_thesis"))
+        rows, curves = dambreak1(rec, meta, data, scenario, dx, same_case=(name == "dambreak1_thesis"))
         report["gpusph_case"] = "DamBreak 1, 0.4 m column" if name == "dambreak1_thesis" else None
         # the thesis's probe is 0.146 m before the obstruction's face; PySPH reads it as before its centre
         report["velocity_probe"] = (scene.get("probes") or {}).get("velocity", {}).get("position")
     elif name.startswith("dambreak2"):
-        rows, curves = dambreak2(rec, meta, shared, scenario, dx, float(scene.get("depth", 0.1)))
+        rows, curves = dambreak2(rec, meta, data, scenario, dx, float(scene.get("depth", 0.1)))
         report["gpusph_case"] = f"DamBreak 2, {scene.get('depth')} m"
     else:
         rows, curves = [], {}
@@ -187,12 +188,18 @@ def table(report) -> str:
     if res.get("status") != "completed":
         head.insert(2, f"WARNING: the run did not complete; these metrics cover t <= {report.get('covers_until', 0):.3g} s only "
                        "and are not comparable with a finished run")
+    compared = report.get("reference_data") is not None
+    if not compared:
+        head.insert(-1, "no reference data found (the package's data/ folder is missing from this install): "
+                        "this run's values alone, no experiment or GPUSPH columns")
     rows = [("metric", "unit", "experiment", "GPUSPH (thesis)", "this run")]
     for m in report["metrics"]:
         rows.append((m["label"], m["unit"], fmt(m["experiment"]), fmt(m["gpusph"], m.get("gpusph_error_pct")),
                      fmt(m["value"], m.get("error_pct")) + (f"  [{m['note']}]" if m["note"] else "")))
-    widths = [max(len(r[k]) for r in rows) for k in range(4)]
-    lines = ["  ".join(r[k].ljust(widths[k]) for k in range(4)) + "  " + r[4] for r in rows]
+    if not compared:
+        rows = [(r[0], r[1], r[4]) for r in rows]
+    widths = [max(len(r[k]) for r in rows) for k in range(len(rows[0]) - 1)]
+    lines = ["  ".join(r[k].ljust(widths[k]) for k in range(len(widths))) + "  " + r[-1] for r in rows]
     return "\n".join(head + lines)
 
 

@@ -34,7 +34,7 @@ def _groups(rows):
     return out
 
 
-def error_vs_dx(rows, metric, shared=None):
+def error_vs_dx(rows, metric, data=None):
     """The figure, or None when no case has an error measure for ``metric``."""
     fig, ax = plt.subplots(figsize=(7, 4.5))
     ylabel = None
@@ -48,7 +48,7 @@ def error_vs_dx(rows, metric, shared=None):
         if metric in THESIS and exact and scene.startswith(("dambreak1_thesis", "dambreak2")):
             table, column = THESIS[metric]
             scen = int(exact[0]["gpusph_scenario"])
-            dx, value = R.gpusph_series(shared, table.format(scene=scene), column, scen)
+            dx, value = R.gpusph_series(data, table.format(scene=scene), column, scen)
             if len(dx):
                 ax.plot(dx * 1000, abs(value), "s--", mfc="none", color=line.get_color(),
                         label=f"GPUSPH (thesis scenario {scen})")
@@ -93,7 +93,7 @@ def error_vs_cost(rows, metric, cost="wall_time_s"):
     return fig
 
 
-def write(rows, metrics, out_dir, shared=None) -> list:
+def write(rows, metrics, out_dir, data=None) -> list:
     """PNG files of every chart that has data; their paths."""
     from pathlib import Path
 
@@ -101,7 +101,7 @@ def write(rows, metrics, out_dir, shared=None) -> list:
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = []
     for metric in metrics:
-        figures = {f"{metric}_vs_dx": error_vs_dx(rows, metric, shared)}
+        figures = {f"{metric}_vs_dx": error_vs_dx(rows, metric, data)}
         figures.update({f"{metric}_vs_{cost}": error_vs_cost(rows, metric, cost) for cost in COSTS})
         for name, fig in figures.items():
             if fig is not None:
