@@ -28,7 +28,7 @@ def test_setup_installs_the_ament_marker_manifest_and_config(tmp_path):
     prefix = tmp_path / "p"
     assert (prefix / "share/ament_index/resource_index/packages/gpusph_ros").is_file()
     assert (prefix / "share/gpusph_ros/package.xml").is_file()
-    for cfg in (REPO / "config").rglob("*"):
+    for cfg in (*(REPO / "config").rglob("*"), *(REPO / "data").rglob("*")):
         if cfg.is_file():
             assert (prefix / "share/gpusph_ros" / cfg.relative_to(REPO)).is_file(), cfg
     assert (prefix / "lib/gpusph_ros/sim_node").is_file()
@@ -37,12 +37,14 @@ def test_setup_installs_the_ament_marker_manifest_and_config(tmp_path):
     # the installed package finds its scenes and run configurations under <prefix>/share
     site = next(prefix.glob("lib/python*/site-packages"))
     code = ("from gpusph_ros.scenes.schema import builtin_names; from gpusph_ros.scenes.run import run_config_names; "
-            "import gpusph_ros.share as s; print(s.config_dir('scenes')); print(builtin_names(), run_config_names())")
+            "import gpusph_ros.share as s; print(s.config_dir('scenes')); print(builtin_names(), run_config_names()); "
+            "from gpusph_ros.analysis.reference import data_dir; print(data_dir())")
     found = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True,
                            env={"PYTHONPATH": str(site), "PATH": "/usr/bin:/bin"})
     assert found.returncode == 0, found.stderr[-2000:]
     assert str(prefix / "share/gpusph_ros/config/scenes") in found.stdout
     assert "dambreak1_thesis" in found.stdout and "thesis_scenario1" in found.stdout
+    assert str(prefix / "share/gpusph_ros/data") in found.stdout  # the reference tables, installed
 
 
 def test_setup_cfg_puts_scripts_where_ros2_run_looks():
