@@ -5,7 +5,6 @@ with no time shift, and the wall time each resolution cost.
 """
 import argparse
 import time
-from pathlib import Path
 
 import numpy as np
 import warp as wp

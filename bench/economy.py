@@ -26,7 +26,8 @@ def run(scene_name: str, dx: float, model: str, device: str, out_dir: Path, extr
     record = run_series(scene_name, dx=dx, model=model, device=device, **extra)
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / f"{scene_name}_{model}_{dx:g}.json").write_text(json.dumps(record))
-    print(f"{scene_name} {model:>5} dx={dx:g}: {record['particles']:,} particles ({record['fluid_particles']:,} fluid), "
+    print(f"{scene_name} {model:>5} dx={dx:g}: {record['particles']:,} particles "
+          f"({record['fluid_particles']:,} fluid), "
           f"{record['steps']:,} steps in {record['wall_s']:.1f} s, {record['mipps']:.2f} MIPPS on {record['device']}; "
           f"{record['status']}", flush=True)
     return record
@@ -48,7 +49,8 @@ def metrics(record: dict, data):
     for scenario in (1, 2, 3):
         value = R.gpusph_value(data, f"{case}_mean_velocity.csv", "mean_velocity_m_s", scenario, record["dx"],
                                0.10 if case.endswith("010") else 0.15)
-        gpusph = gpusph if value is None else (value if gpusph is None else min(gpusph, value, key=lambda v: abs(v - experiment)))
+        if value is not None:
+            gpusph = value if gpusph is None else min(gpusph, value, key=lambda v: abs(v - experiment))
     profile_error = None
     if case.endswith("015"):
         exp = R.experiment_profile(data)

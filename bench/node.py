@@ -95,8 +95,9 @@ def cloud(device: str, repeat: int):
 
 def response(device: str, samples: int):
     sys.path.insert(0, str(BENCH.parent / "tests"))
-    from ros_client import Client
     from std_srvs.srv import SetBool
+
+    from ros_client import Client
 
     domain = 150 + os.getpid() % 50
     env = {**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}

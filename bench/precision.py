@@ -31,7 +31,8 @@ def compare(a: dict, b: dict) -> list:
             continue
         diff = np.abs(x - y)
         apart = np.nonzero(diff > 0.1 * peak)[0]
-        rows.append({"series": name, "peak_f32": float(x[np.argmax(np.abs(x))]), "peak_f64": float(y[np.argmax(np.abs(y))]),
+        rows.append({"series": name, "peak_f32": float(x[np.argmax(np.abs(x))]),
+                     "peak_f64": float(y[np.argmax(np.abs(y))]),
                      "rms_rel": float(np.sqrt(np.mean(diff ** 2)) / peak),
                      "apart_at": float(t[apart[0]]) if len(apart) else None})
     return rows
@@ -47,10 +48,12 @@ def report(folder) -> str:
         if set(pair) != set(PRECISIONS):
             continue
         a, b = pair["float32"], pair["float64"]
-        lines += [f"\n{scene} at dx = {dx:g} m on {device}: {a['particles']:,} particles; float32 {a['steps']:,} steps in "
+        lines += [f"\n{scene} at dx = {dx:g} m on {device}: {a['particles']:,} particles; "
+                  f"float32 {a['steps']:,} steps in "
                   f"{a['wall_s']:.1f} s ({a['status']}), float64 {b['steps']:,} steps in {b['wall_s']:.1f} s "
                   f"({b['status']})",
-                  "| series | peak float32 | peak float64 | peak difference | RMS difference / peak | apart by 10% of peak from |",
+                  "| series | peak float32 | peak float64 | peak difference | RMS difference / peak "
+                  "| apart by 10% of peak from |",
                   "|---|---|---|---|---|---|"]
         for row in compare(a, b):
             apart = "never" if row["apart_at"] is None else f"t = {row['apart_at']:.2f} s"

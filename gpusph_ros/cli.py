@@ -76,10 +76,12 @@ def run_main(argv=None):
 
 def analyze_main(argv=None):
     parser = argparse.ArgumentParser(prog="gpusph-analyze",
-                                     description="The thesis's metrics of a recording beside the experiment and GPUSPH.")
+                                     description="The thesis's metrics of a recording beside the experiment "
+                                                 "and GPUSPH.")
     parser.add_argument("recording", help="bag directory written by gpusph-run or sim_node")
     parser.add_argument("--charts", help="where metrics.json and the PNG charts go (default: DIR/analysis)")
-    parser.add_argument("--reference", help="a reference folder laid out as the package's data/ (default: the package's own)")
+    parser.add_argument("--reference", help="a reference folder laid out as the package's data/ "
+                                            "(default: the package's own)")
     parser.add_argument("--no-charts", action="store_true")
     args = parser.parse_args(argv)
     from pathlib import Path
@@ -119,13 +121,13 @@ def _analyze_study(folder) -> int:
 
 
 def sweep_main(argv=None):
-    parser = argparse.ArgumentParser(prog="gpusph-sweep", description="Run a study's cases on Dask, tabulate and chart them.")
+    parser = argparse.ArgumentParser(prog="gpusph-sweep",
+                                     description="Run a study's cases on Dask, tabulate and chart them.")
     parser.add_argument("study", help="a study in config/studies or a path to a study YAML file")
     parser.add_argument("--scheduler", help="address of a running Dask scheduler (default: a local cluster)")
     parser.add_argument("--out", help="results folder (default: the study's `out`)")
     args = parser.parse_args(argv)
     import json
-    from pathlib import Path
 
     import warp as wp
 

@@ -32,7 +32,8 @@ def plan(scene, run_config, calibration_steps: int = 30) -> dict:
     dt = (solver.time - t0) / steps
     rate = steps / wall
     end = run_config.output.end_time
-    return {"scene": scene.name, "model": run_config.reduction.label, "dx": model.config.dx, "kernel": model.config.kernel,
+    return {"scene": scene.name, "model": run_config.reduction.label, "dx": model.config.dx,
+            "kernel": model.config.kernel,
             "precision": model.config.precision, "device": str(solver.device), "particles": solver.n,
             "fluid_particles": model.fluid_particles, "device_bytes": solver.device_bytes(),
             "calibration_steps": steps, "calibration_wall_s": wall, "dt": dt, "steps_per_s": rate,
@@ -70,8 +71,10 @@ def text(p: dict) -> str:
     return "\n".join([
         f"{p['scene']} ({p['model']}): dx = {p['dx']:g} m, {p['kernel']} kernel, {p['precision']} on {p['device']}",
         f"particles    {p['particles']:,} ({p['fluid_particles']:,} fluid)",
-        f"memory       {p['device_bytes'] / 1e6:.1f} MB on {p['device']} ({p['device_bytes'] / p['particles']:.0f} B a particle)",
-        f"calibration  {p['calibration_steps']} steps from rest in {p['calibration_wall_s']:.2f} s: dt {p['dt']:.3g} s, "
+        f"memory       {p['device_bytes'] / 1e6:.1f} MB on {p['device']} "
+        f"({p['device_bytes'] / p['particles']:.0f} B a particle)",
+        f"calibration  {p['calibration_steps']} steps from rest in {p['calibration_wall_s']:.2f} s: "
+        f"dt {p['dt']:.3g} s, "
         f"{p['steps_per_s']:.1f} steps/s, {p['mipps']:.3f} MIPPS",
         f"estimate     to t = {p['end_time']:g} s: about {p['steps']:,} steps (at least: faster flow, shorter steps), "
         f"about {p['wall_s'] / 60:.1f} min of wall time",

@@ -66,7 +66,8 @@ class Run:
         """One line on the run: scene, spacing, particles, numerics, device, end time, output rate."""
         cfg = self.model.config
         model = "" if self.run_config.reduction.label == "full" else f" ({self.run_config.reduction.label})"
-        return (f"{self.scene.name}{model}: dx = {cfg.dx:g} m, {self.solver.n} particles ({self.model.fluid_particles} fluid), "
+        return (f"{self.scene.name}{model}: dx = {cfg.dx:g} m, {self.solver.n} particles "
+                f"({self.model.fluid_particles} fluid), "
                 f"{cfg.kernel} kernel, {cfg.viscosity} viscosity, {cfg.boundary} boundaries, {cfg.density_diffusion} "
                 f"density diffusion, {cfg.precision} on {self.solver.device}; to t = {self.output.end_time:g} s, "
                 f"outputs at {self.output.output_rate:g} Hz")

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 import warp as wp
 
-wp.config.log_level = wp.LOG_WARNING
-
 from gpusph_ros.analysis.reference import data_dir
+
+wp.config.log_level = wp.LOG_WARNING
 
 REPO = Path(__file__).resolve().parents[1]
 

@@ -11,7 +11,6 @@ from gpusph_ros.scenes.run import read_run_file
 from gpusph_ros.scenes.schema import load_scene
 from gpusph_ros.sph import Solver
 
-
 SCENE = load_scene("collapse_2d")
 A = SCENE.fluid[0].hi[0]  # column width a
 # the defaults in both precisions, and the thesis's scenario 3 as GPUSPH ran it (cubic spline,
@@ -20,7 +19,8 @@ THESIS_SCENARIO_3 = read_run_file("thesis_scenario3")
 CASES = [("float32", {}), ("float64", {}), ("float32", THESIS_SCENARIO_3)]
 
 
-@pytest.mark.parametrize("precision, numerics", CASES, ids=["defaults-float32", "defaults-float64", "thesis-scenario-3"])
+@pytest.mark.parametrize("precision, numerics", CASES,
+                         ids=["defaults-float32", "defaults-float64", "thesis-scenario-3"])
 def test_surge_front_matches_martin_moyce(reference_data, precision, numerics):
     table = np.loadtxt(reference_data / "martin_moyce_1952_collapse/ocellaris/martin_moyce_1952_table2_surge_front.txt")
     points = table[(table[:, 0] >= 1.0) & (table[:, 0] <= 2.55)]

@@ -7,9 +7,8 @@ import sys
 
 import pytest
 
-from test_analysis import record_synthetic_bore
-
 from conftest import REPO
+from test_analysis import record_synthetic_bore
 
 ANALYZE = ("import sys, gpusph_ros; print('package:', gpusph_ros.__file__); "
            "from gpusph_ros.cli import analyze_main; sys.exit(analyze_main([sys.argv[1], '--no-charts']))")

@@ -12,9 +12,10 @@ Reference: hydrostatics, p = rho0 g d. Walls: Crespo et al. 2007 (dynamic), Mona
 import numpy as np
 import pytest
 
-from conftest import hydrostatic_errors
 from gpusph_ros.scenes.boxes import box_tank
 from gpusph_ros.sph import Solver, SolverConfig
+
+from conftest import hydrostatic_errors
 
 DX = 0.01
 SETTLE_UNTIL, SETTLE_TAU = 0.4, 0.02

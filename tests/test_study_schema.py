@@ -8,7 +8,8 @@ from gpusph_ros.study.schema import load_study, study_names
 
 
 def test_the_thesis_studies_hold_the_thesis_cases():
-    assert {"thesis_dambreak1", "thesis_dambreak2", "thesis_dambreak1_cpu", "thesis_dambreak2_cpu"} <= set(study_names())
+    names = {"thesis_dambreak1", "thesis_dambreak2", "thesis_dambreak1_cpu", "thesis_dambreak2_cpu"}
+    assert names <= set(study_names())
     db1 = load_study("thesis_dambreak1")
     cases = db1.cases()
     assert len(cases) == 54 and len({c.name for c in cases}) == 54  # 18 spacings x 3 scenarios (Tables 2, 6-24)

@@ -63,7 +63,8 @@ def experiment_series(data, name: str):
     """A digitised Yeh & Petroff series, (t, value) sorted by time: 'velocity' or 'force'."""
     if data is None:
         return None
-    path = data / "yeh_petroff_dambreak_column/pysph" / f"yeh_and_petroff_{'v' if name == 'velocity' else 'force'}_data.txt"
+    stem = "v" if name == "velocity" else "force"
+    path = data / "yeh_petroff_dambreak_column/pysph" / f"yeh_and_petroff_{stem}_data.txt"
     data = np.loadtxt(path, comments="#")
     data = data[np.argsort(data[:, 0], kind="stable")]
     return data[:, 0], data[:, 1]
@@ -86,7 +87,8 @@ def gpusph_profile(data, scenario, dx):
             if int(r["scenario"]) == scenario and abs(float(r["dx_m"]) - dx) < 1e-4]
     if not rows:
         return None
-    return (np.array([float(r["height_mm"]) / 1000 for r in rows]), np.array([float(r["normalized_velocity"]) for r in rows]))
+    return (np.array([float(r["height_mm"]) / 1000 for r in rows]),
+            np.array([float(r["normalized_velocity"]) for r in rows]))
 
 
 def gpusph_series(data, table: str, column: str, scenario: int):

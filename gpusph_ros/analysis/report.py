@@ -57,7 +57,8 @@ def dambreak1(rec, meta, data, scenario, dx, same_case):
     exp_v = R.experiment_series(data, "velocity")
     t_ref = M.peak(*M.moving_average(*exp_v))[0] if exp_v else 0.0
     t_al = M.align_to(t, u, t_ref)
-    out.append(_metric("peak_velocity", M.peak(t, u)[1], R.experiment_value(data, "dambreak1", "peak_velocity_at_probe"),
+    out.append(_metric("peak_velocity", M.peak(t, u)[1],
+                       R.experiment_value(data, "dambreak1", "peak_velocity_at_probe"),
                        gp("dambreak1_peak_velocity.csv", "peak_velocity_m_s")))
     if exp_v:
         first = exp_v[0] < 0.7  # the thesis used the first group of points only (4.2.1)
@@ -175,18 +176,21 @@ def table(report) -> str:
     scen = report.get("gpusph_scenario")
     if report.get("gpusph_case") and scen:
         gp = (f"GPUSPH: thesis scenario {scen} ({R.SCENARIOS[scen]}), {report['gpusph_case']}, dx = {report['dx']:g} m"
-              + ("" if report.get("gpusph_scenario_exact") else " [same kernel; our turbulence/viscosity model differs]"))
+              + ("" if report.get("gpusph_scenario_exact")
+                 else " [same kernel; our turbulence/viscosity model differs]"))
     else:
         gp = "GPUSPH: the thesis has no run of this scene with these numerics"
     head = [f"{report['scene']}: dx = {report['dx']:g} m, {report['kernel']} kernel, {report['viscosity']} viscosity, "
             f"{report['boundary']} boundaries, {report['precision']} on {report['device']}",
-            f"{report['particles']:,} particles ({report['fluid_particles']:,} fluid); status {res.get('status', 'unknown (no result record: killed?)')}, "
+            f"{report['particles']:,} particles ({report['fluid_particles']:,} fluid); "
+            f"status {res.get('status', 'unknown (no result record: killed?)')}, "
             f"wall {res.get('wall_time_s', '?')} s, {res.get('steps', '?')} steps, {res.get('mipps', '?')} MIPPS",
             gp, ""]
     if report.get("velocity_probe"):
         head.insert(-1, f"velocity probe at {report['velocity_probe']} m")
     if res.get("status") != "completed":
-        head.insert(2, f"WARNING: the run did not complete; these metrics cover t <= {report.get('covers_until', 0):.3g} s only "
+        head.insert(2, "WARNING: the run did not complete; these metrics cover "
+                       f"t <= {report.get('covers_until', 0):.3g} s only "
                        "and are not comparable with a finished run")
     compared = report.get("reference_data") is not None
     if not compared:
@@ -240,7 +244,8 @@ def charts(report, curves, out_dir) -> list:
         td, ud, fr = curves["D"]
         fig, ax = plt.subplots(figsize=(7, 4))
         ax.plot(td, ud, label="this run (0.04 s average)")
-        ax.plot([fr["t_forward"], fr["t_return"]], [fr["max_forward"], fr["max_return"]], "ro", label="max forward / return")
+        ax.plot([fr["t_forward"], fr["t_return"]], [fr["max_forward"], fr["max_return"]], "ro",
+                label="max forward / return")
         ax.set(xlabel="time [s]", ylabel="x-velocity [m/s]", title=f"Point D\n{title}")
         ax.legend()
         save(fig, "point_D.png")

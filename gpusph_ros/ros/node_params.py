@@ -11,11 +11,11 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..measure.cloud import FIELDS as PARTICLE_FIELDS
 from ..scenes.reduce import MODELS
 from ..scenes.run import resolve
 from ..scenes.schema import builtin_names, load_scene
 from ..sph.config import BOUNDARIES, DENSITY_DIFFUSIONS, KERNELS, PRECISIONS, ConfigError
-from ..measure.cloud import FIELDS as PARTICLE_FIELDS
 
 # when a change takes effect
 RESET = "reset"  # needs new particles or buffers: at the next ~/reset
@@ -138,7 +138,8 @@ def run_settings(values: dict):
                                        "cfl", "c0")}
     numerics["viscosity"] = "sps" if values["sps"] else values["viscosity"]
     reduction = {k: values[k] for k in ("model", "crop", "wall_planes")}
-    config = resolve(scene, **numerics, **output, **reduction, particle_rate=0.0)  # the node's clouds follow output_rate
+    # the node's clouds follow output_rate
+    config = resolve(scene, **numerics, **output, **reduction, particle_rate=0.0)
     rate = config.output.output_rate if values["publish_particles"] else 0.0
     config.output = dataclasses.replace(config.output, particle_rate=rate)
     return scene, config

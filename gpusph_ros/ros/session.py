@@ -202,7 +202,8 @@ class Session:
             if paused:
                 return True, f"paused at t = {t:.4f} s (the solver stops before its next step)"
             if run.done:
-                return True, f"resumed, but the run is at end_time = {run.output.end_time:g} s; raise end_time or ~/reset"
+                return True, (f"resumed, but the run is at end_time = {run.output.end_time:g} s; "
+                              "raise end_time or ~/reset")
             return True, f"running from t = {t:.4f} s"
 
     def step(self, timeout: float) -> tuple:

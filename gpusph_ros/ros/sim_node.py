@@ -39,7 +39,8 @@ STEP_WAIT = 30.0  # [s] the longest ~/step waits for its output before it answer
 
 
 def _qos(reliable: bool, depth: int) -> QoSProfile:
-    return QoSProfile(depth=depth, reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT)
+    reliability = ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT
+    return QoSProfile(depth=depth, reliability=reliability)
 
 
 def _descriptor(p) -> ParameterDescriptor:
@@ -268,7 +269,8 @@ class SimNode(LifecycleNode):
     def _publish_diagnostics(self):
         stats = self.session.stats()
         state = stats["state"]
-        level = {"failed": DiagnosticStatus.ERROR, "unconfigured": DiagnosticStatus.WARN}.get(state, DiagnosticStatus.OK)
+        level = {"failed": DiagnosticStatus.ERROR,
+                 "unconfigured": DiagnosticStatus.WARN}.get(state, DiagnosticStatus.OK)
         message = f"failed: {stats['error']}" if state == "failed" else state
         if self.awaiting_reset:
             message += f" ({', '.join(sorted(self.awaiting_reset))} changed: applies at the next ~/reset)"

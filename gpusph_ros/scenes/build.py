@@ -11,8 +11,8 @@ import numpy as np
 
 from ..sph.config import Plane, SolverConfig
 from ..sph.solver import BOUNDARY, FLUID, Particles
-from .boxes import box_tank, boundary_layers, lattice
 from . import reduce
+from .boxes import boundary_layers, box_tank, lattice
 from .schema import Scene
 
 

@@ -180,8 +180,8 @@ class Solver:
                                                    self.ids, self._needs_list)]
         self.pressure = wp.zeros(n, dtype=s, device=dev)
         # half-step and candidate states, rates of change
-        self._pos_h, self._vel_h, self._rho_h = wp.zeros_like(self.pos), wp.zeros_like(self.vel), wp.zeros_like(self.rho)
-        self._pos_c, self._vel_c, self._rho_c = wp.zeros_like(self.pos), wp.zeros_like(self.vel), wp.zeros_like(self.rho)
+        self._pos_h, self._vel_h, self._rho_h = (wp.zeros_like(a) for a in (self.pos, self.vel, self.rho))
+        self._pos_c, self._vel_c, self._rho_c = (wp.zeros_like(a) for a in (self.pos, self.vel, self.rho))
         self.acc, self._xsph = wp.zeros(n, dtype=v, device=dev), wp.zeros(n, dtype=v, device=dev)
         self._drho = wp.zeros(n, dtype=s, device=dev)
         shared = dict(pressure=self.pressure, p_rho2=wp.zeros(n, dtype=s, device=dev), mass=self.mass,
@@ -277,7 +277,8 @@ class Solver:
         clock = self._clock.numpy()
         steps = self._steps.numpy()
         fail = self._fail.numpy()
-        self.time, self.dt, self.dt_stable, self.steps = float(clock[0]), float(clock[1]), float(clock[2]), int(steps[0])
+        self.time, self.dt, self.dt_stable = float(clock[0]), float(clock[1]), float(clock[2])
+        self.steps = int(steps[0])
         for check, idx in zip(passes.CHECKS, fail):
             if idx == passes.NO_FAILURE:
                 continue

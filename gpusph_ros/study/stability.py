@@ -223,7 +223,8 @@ def chart(rows, path):
         ax.set_title(title, fontsize=9)
         fig.colorbar(image, ax=ax, shrink=0.8)
     fig.suptitle("Stability map (letter: how the first unstable value failed; N NaN, O out of domain, D density, "
-                 "W wall penetration, C clumping, E energy growth, L list overflow; grey, x: fails even at the safe end)",
+                 "W wall penetration, C clumping, E energy growth, L list overflow; "
+                 "grey, x: fails even at the safe end)",
                  fontsize=9)
     fig.savefig(path, dpi=110)
     plt.close(fig)

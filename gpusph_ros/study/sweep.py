@@ -14,9 +14,8 @@ from .case import finished_row, run_case
 
 
 def _local_cluster(study, device: str):
-    from distributed import LocalCluster
-
     import warp as wp
+    from distributed import LocalCluster
 
     gpus = wp.get_cuda_device_count() if device.startswith("cuda") else 0
     workers = study.workers or gpus or os.cpu_count() or 1
