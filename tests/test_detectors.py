@@ -1,4 +1,4 @@
-"""Failure detectors for what does not show as NaN (sph.passes, CHECKS): each fires on a run broken
+"""Failure detectors for what does not show as NaN (sph.health, CHECKS): each fires on a run broken
 on purpose and stays quiet on the same run done right.
 
 - wall_penetration: a column thrown at 3 m/s onto a Lennard-Jones floor (Monaghan 1994; thesis
@@ -17,6 +17,8 @@ from gpusph_ros.scenes.build import build
 from gpusph_ros.scenes.schema import load_scene
 from gpusph_ros.sph import HealthError, Particles, Solver
 from gpusph_ros.sph.config import SolverConfig
+
+pytestmark = pytest.mark.physics
 
 WIDE = dict(rho_min_ratio=0.2, rho_max_ratio=5.0)  # so the density check does not speak first
 

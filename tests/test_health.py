@@ -6,7 +6,9 @@ import pytest
 from gpusph_ros.scenes.build import build
 from gpusph_ros.scenes.schema import load_scene
 from gpusph_ros.sph import HealthError, Solver
-from gpusph_ros.sph.passes import CHECKS
+from gpusph_ros.sph.health import CHECKS
+
+pytestmark = pytest.mark.physics
 
 
 def column(**overrides):

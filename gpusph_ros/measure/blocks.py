@@ -12,9 +12,8 @@ import functools
 import numpy as np
 import warp as wp
 
-from ..sph import passes
+from ..sph.state import FLUID
 
-FLUID = passes.FLUID
 ACROSS = 3.0  # block size across the face, in dx
 ALONG = 4.0  # block depth along the flow, in dx
 

@@ -6,9 +6,7 @@ import functools
 import numpy as np
 import warp as wp
 
-from ..sph import passes
-
-FLUID = passes.FLUID
+from ..sph.state import FLUID
 
 
 @functools.lru_cache(maxsize=None)

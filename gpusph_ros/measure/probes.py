@@ -13,17 +13,18 @@ import functools
 import numpy as np
 import warp as wp
 
-from ..sph import kernels, neighbours, passes
-
-FLUID = passes.FLUID
+from ..sph import kernels, neighbours, state
+from ..sph.state import FLUID
 
 
 @functools.lru_cache(maxsize=None)
 def build(scalar):
     vec = wp.types.vector(3, scalar)
-    _, _, kernel_w, _, _ = kernels.build(scalar)
-    Grid, separation, *_, cell_coord, neighbour_cell = neighbours.build(scalar)
-    Params, Fields, *_ = passes.build(scalar)
+    kernel_w = kernels.build(scalar).w
+    N = neighbours.build(scalar)
+    Grid, separation, cell_coord, neighbour_cell = N.Grid, N.separation, N.cell_coord, N.neighbour_cell
+    S = state.build(scalar)
+    Params, Fields = S.Params, S.Fields
 
     @wp.kernel(enable_backward=False, module="unique")
     def interpolate(p: Params, grid: Grid, start: wp.array(dtype=wp.int32), end: wp.array(dtype=wp.int32),

@@ -12,7 +12,8 @@ import numpy as np
 
 from ..sph.config import Plane, SolverConfig
 from ..sph.eos import hydrostatic_density
-from ..sph.solver import BOUNDARY, FLUID, Particles
+from ..sph.solver import Particles
+from ..sph.state import BOUNDARY, FLUID
 
 WALL_KINDS = ("particles", "planes")
 

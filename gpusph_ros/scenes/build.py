@@ -10,7 +10,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..sph.config import Plane, SolverConfig
-from ..sph.solver import BOUNDARY, FLUID, Particles
+from ..sph.solver import Particles
+from ..sph.state import BOUNDARY, FLUID
 from . import reduce
 from .boxes import boundary_layers, box_tank, lattice
 from .schema import Scene

@@ -1,8 +1,10 @@
 """The SPH solver: Warp kernels and their drivers. Imports nothing from ROS."""
 
 from .config import BOUNDARIES, DENSITY_DIFFUSIONS, KERNELS, PRECISIONS, VISCOSITIES, ConfigError, Plane, SolverConfig
+from .health import HealthError
 from .neighbours import NeighbourOverflow
-from .solver import BOUNDARY, FLUID, HealthError, Particles, Solver
+from .solver import Particles, Solver
+from .state import BOUNDARY, FLUID
 
 __all__ = [
     "BOUNDARIES", "DENSITY_DIFFUSIONS", "KERNELS", "PRECISIONS", "VISCOSITIES", "ConfigError", "Plane",

@@ -1,11 +1,11 @@
 """Boundary forces on fluid particles, chosen by name.
 
-- lennard_jones: Monaghan 1994; thesis Eq. 2.24-2.25. f = D ((r0/r)^12 - (r0/r)^6) r / r^2 for
-  r < r0 (zero beyond: no attraction), D = 5 g H, r0 = dx.
+- lennard_jones: Monaghan 1994; thesis Eq. 2.24-2.25. f = D ((r0/r)^p1 - (r0/r)^p2) r / r^2 with
+  p1 = 12, p2 = 6 (GPUSPH's choice) for r < r0 (zero beyond: no attraction), D = 5 g H, r0 = dx.
 - monaghan_kajtar: Monaghan & Kajtar 2009; thesis Eq. 2.26-2.27.
-  f = K / beta r / r^2 W(q) 2 m_b / (m_a + m_b), K = g H, with W the 1D Wendland shape
-  (1 - q/2)^4 (1 + 2q) normalised to W(0) = 1, so that f is an acceleration. Boundary particles
-  are spaced dx / beta along a wall (default beta = 2), which smooths the summed force along it.
+  f = K / beta r / r^2 W(q) 2 m_b / (m_a + m_b), K = g H, with W the Wendland shape
+  (1 - q/2)^4 (1 + 2q) normalised to W(0) = 1 (kernels.shape), so that f is an acceleration.
+  Boundary particles are spaced dx / beta along a wall (default beta = 2), which smooths the summed force along it.
   The paper is 2D, where K / beta keeps the force per unit wall length independent of beta; a 3D
   wall holds beta^2 boundary particles per fluid particle's footprint, so 3D divides by beta^2
   (``mk_beta_factor`` = beta^(dim - 1)) to keep the force per unit wall area the same.
@@ -21,26 +21,39 @@
   -2 rho_a (u_a . n) Gamma'(d) to drho/dt, which balances a hydrostatic column exactly as the
   truncated kernel would have lacked. A Lennard-Jones term with r0 = dx/2 (the lattice's
   distance to the wall) stops penetration where the pressure is near zero.
+
+The wall constants (D, r0, K, the plane's r0) follow from the scene's g, depth and dx
+(``wall_constants``).
 """
 
 import functools
+from types import SimpleNamespace
 
 import warp as wp
 
 from . import kernels
 
 BOUNDARY_ID = {"lennard_jones": 0, "monaghan_kajtar": 1, "dynamic": 2}
+WENDLAND = kernels.WENDLAND
 
 
+def wall_constants(g: float, depth: float, dx: float, mk_beta: float, dim: int) -> dict:
+    """The wall models' constants for gravity ``g``, fluid depth H and spacing dx, named as in Params:
+    Lennard-Jones D = 5 g H (Eq. 2.25) and r0 = dx; Monaghan-Kajtar K = g H (Eq. 2.27) and the
+    spacing ratio beta^(dim - 1) (see above: force per unit wall area); the plane's r0 = dx / 2."""
+    return {"lj_d": 5.0 * g * depth, "lj_r0": dx, "mk_k": g * depth, "mk_beta": mk_beta ** (dim - 1),
+            "plane_r0": 0.5 * dx}
 
 
 @functools.lru_cache(maxsize=None)
 def build(scalar):
     vec = wp.types.vector(3, scalar)
-    shape, _, w, _, _ = kernels.build(scalar)
+    K = kernels.build(scalar)
+    shape, w = K.shape, K.w
 
     @wp.func
     def lennard_jones(d_coef: scalar, r0: scalar, r_ab: vec, r: scalar) -> vec:
+        """Repulsion of a boundary particle at -r_ab on a fluid one (Eq. 2.24): an acceleration."""
         if r >= r0 or r <= scalar(0.0):
             return vec(scalar(0.0))
         s2 = (r0 / r) * (r0 / r)
@@ -50,11 +63,10 @@ def build(scalar):
     @wp.func
     def monaghan_kajtar(k_coef: scalar, beta: scalar, inv_h: scalar, m_a: scalar, m_b: scalar,
                         r_ab: vec, r: scalar) -> vec:
-        q = r * inv_h
-        if q >= scalar(2.0) or r <= scalar(0.0):
+        """Repulsion of a boundary particle of mass m_b on a fluid one of mass m_a (Eq. 2.26)."""
+        if r * inv_h >= scalar(2.0) or r <= scalar(0.0):
             return vec(scalar(0.0))
-        t = scalar(1.0) - scalar(0.5) * q
-        wq = t * t * t * t * (scalar(1.0) + scalar(2.0) * q)
+        wq = shape(WENDLAND, r * inv_h)
         return k_coef / beta * wq / (r * r) * scalar(2.0) * m_b / (m_a + m_b) * r_ab
 
     @wp.func
@@ -75,4 +87,16 @@ def build(scalar):
                 total += wk * scalar(2.0) * ds
         return total
 
-    return lennard_jones, monaghan_kajtar, plane_kernel_flux
+    @wp.func
+    def plane_wall(kernel: int, norm: scalar, inv_h: scalar, dim: int, d: scalar, n: vec, p_a: scalar,
+                   rho_a: scalar, u_a: vec, lj_d: scalar, r0: scalar):
+        """What a plane at distance d along its inward normal n does to a fluid particle of pressure
+        p_a (clipped at 0), density rho_a and velocity u_a: (acceleration, drho/dt), the mirror
+        terms plus the Lennard-Jones term with r0 = dx / 2."""
+        flux = plane_kernel_flux(kernel, norm, inv_h, dim, d)
+        if flux <= scalar(0.0):
+            return vec(scalar(0.0)), scalar(0.0)
+        acc = scalar(2.0) * p_a / rho_a * flux * n + lennard_jones(lj_d, r0, d * n, d)
+        return acc, scalar(-2.0) * rho_a * wp.dot(u_a, n) * flux
+
+    return SimpleNamespace(lennard_jones=lennard_jones, monaghan_kajtar=monaghan_kajtar, plane_wall=plane_wall)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from dataclasses import dataclass, field
 
 KERNELS = ("quadratic", "cubic_spline", "wendland")
@@ -19,6 +20,11 @@ PRECISIONS = ("float32", "float64")
 # neighbour lists reach LIST_SKIN kernel supports; a list stays valid until some particle has moved
 # half the difference since it was built (a Verlet list)
 LIST_SKIN = 1.1
+
+
+def default_device() -> str:
+    """The Warp device a run uses unless it names one: $GPUSPH_ROS_DEVICE (cuda:0, say), else cpu."""
+    return os.environ.get("GPUSPH_ROS_DEVICE", "cpu")
 
 
 class ConfigError(ValueError):
@@ -72,7 +78,7 @@ class SolverConfig:
     settle_tau: float = 0.0
     settle_until: float = 0.0
     precision: str = "float32"
-    device: str = "cpu"
+    device: str = field(default_factory=default_device)
     cpu_threads: int = 0  # threads for the heavy passes on a CPU device; 0 = every core
     domain_lo: tuple = (0.0, 0.0, 0.0)
     domain_hi: tuple = (1.0, 1.0, 1.0)

@@ -7,18 +7,27 @@
   D_a = delta h c0 sum_b 2 ((rho_b - rho_a) - rho^H_ba) (r_ba . grad_a W_ab) / (r^2 + 0.01 h^2) V_b.
 - Shepard filter: thesis Eq. 2.28, rho_a = sum_b m_b W_ab / sum_b (m_b / rho_b) W_ab. It is a
   normalised sum, so a lattice whose plain kernel sum is not 1 leaves a uniform density unchanged.
+  The particle itself is included; boundary neighbours count only when they carry a density
+  (dynamic boundaries).
 """
 
 import functools
+from types import SimpleNamespace
 
 import warp as wp
 
+from . import kernels, neighbours, state
+
 DENSITY_DIFFUSION_ID = {"none": 0, "delta": 1}
+FLUID = state.FLUID
 
 
 @functools.lru_cache(maxsize=None)
 def build(scalar):
     vec = wp.types.vector(3, scalar)
+    kernel_w = kernels.build(scalar).w
+    N = neighbours.build(scalar)
+    Grid, separation = N.Grid, N.separation
 
     @wp.func
     def continuity(m_b: scalar, u_ab: vec, grad: vec) -> scalar:
@@ -34,4 +43,21 @@ def build(scalar):
         psi = scalar(2.0) * ((rho_b - rho_a) - rho_h) * wp.dot(-r_ab, grad) / r2_eta
         return delta_hc0 * psi * m_b / rho_b
 
-    return continuity, delta_diffusion
+    @wp.func
+    def shepard(kernel: int, norm: scalar, inv_h: scalar, with_boundary: bool, grid: Grid,
+                nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32), i: int, pos: wp.array(dtype=vec),
+                rho: wp.array(dtype=scalar), mass: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32)) -> scalar:
+        """The Shepard density of particle i over its neighbour list."""
+        w0 = kernel_w(kernel, norm, inv_h, scalar(0.0))
+        num = mass[i] * w0
+        den = mass[i] / rho[i] * w0
+        base = i * grid.max_neighbours
+        for k in range(count[i]):
+            j = nbr[base + k]
+            if ptype[j] == FLUID or with_boundary:
+                wk = kernel_w(kernel, norm, inv_h, wp.length(separation(grid, pos[i], pos[j])))
+                num += mass[j] * wk
+                den += mass[j] / rho[j] * wk
+        return num / den
+
+    return SimpleNamespace(continuity=continuity, delta_diffusion=delta_diffusion, shepard=shepard)

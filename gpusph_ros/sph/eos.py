@@ -1,9 +1,15 @@
 """Tait equation of state (thesis Eq. 2.12-2.14; Monaghan 1994, Batchelor 1967).
 
-p = B ((rho / rho0)^gamma - 1), B = c0^2 rho0 / gamma.
+- pressure: p = B ((rho / rho0)^gamma - 1), B = c0^2 rho0 / gamma (Eq. 2.12-2.13; c0 of Eq. 2.14
+  is set as a multiple of sqrt(g H), config.SolverConfig.sound_speed).
+- elastic_energy: the work of compression per unit mass, e(rho) = int_rho0^rho p / rho'^2 drho' =
+  B / rho0 ((rho / rho0)^(gamma - 1) - 1) / (gamma - 1) + B (1 / rho - 1 / rho0), the Tait law
+  integrated; the energy check (health.py) adds it to the kinetic and potential energy.
+- hydrostatic_density: the Tait law inverted at p = rho0 g d, for the initial state.
 """
 
 import functools
+from types import SimpleNamespace
 
 import numpy as np
 import warp as wp
@@ -16,16 +22,11 @@ def build(scalar):
         return b * (wp.pow(rho / rho0, gamma) - scalar(1.0))
 
     @wp.func
-    def sound_speed(rho: scalar, rho0: scalar, c0: scalar, gamma: scalar) -> scalar:
-        """Local c = c0 (rho / rho0)^((gamma - 1) / 2), from dp/drho of the Tait law."""
-        return c0 * wp.pow(rho / rho0, scalar(0.5) * (gamma - scalar(1.0)))
+    def elastic_energy(rho: scalar, rho0: scalar, b: scalar, gamma: scalar) -> scalar:
+        return (b / rho0 * (wp.pow(rho / rho0, gamma - scalar(1.0)) - scalar(1.0)) / (gamma - scalar(1.0))
+                + b * (scalar(1.0) / rho - scalar(1.0) / rho0))
 
-    @wp.func
-    def density_for_pressure(p: scalar, rho0: scalar, b: scalar, gamma: scalar) -> scalar:
-        """The inverse of ``pressure``: rho0 (1 + p / B)^(1 / gamma)."""
-        return rho0 * wp.pow(scalar(1.0) + p / b, scalar(1.0) / gamma)
-
-    return pressure, sound_speed, density_for_pressure
+    return SimpleNamespace(pressure=pressure, elastic_energy=elastic_energy)
 
 
 def hydrostatic_density(depth, rho0: float, b: float, gamma: float, g: float):

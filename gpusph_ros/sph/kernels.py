@@ -1,6 +1,7 @@
-"""Smoothing kernels W(r, h) with compact support 2h, in 2D and 3D.
+"""Smoothing kernels W(r, h) with compact support 2h, in 2D and 3D, for the SPH interpolant
+f(x) = sum_j f_j W(x - x_j) V_j (thesis Eq. 2.4).
 
-- quadratic: thesis Eq. 2.5-2.6 (Johnson et al. 1996; Gomez-Gesteira et al. 2010).
+- quadratic: thesis Eq. 2.5-2.8 (Johnson et al. 1996; Gomez-Gesteira et al. 2010).
   W = a_D (3/16 q^2 - 3/4 q + 3/4), a_D = 5 / (4 pi h^3) in 3D, 2 / (pi h^2) in 2D.
 - cubic_spline: thesis Eq. 2.9-2.10 (Monaghan & Lattanzio 1985).
   W = a_D (1 - 1.5 q^2 + 0.75 q^3) for q < 1, a_D 0.25 (2 - q)^3 for 1 <= q < 2,
@@ -14,13 +15,15 @@ serves every kernel; the branch costs nothing next to the neighbour loop.
 
 import functools
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import warp as wp
 
-from .config import KERNELS
+from .config import KERNELS, default_device
 
 KERNEL_ID = {name: k for k, name in enumerate(KERNELS)}
+WENDLAND = KERNEL_ID["wendland"]
 
 _NORM = {
     ("quadratic", 2): 2.0 / math.pi,
@@ -94,13 +97,15 @@ def build(scalar):
         w_out[i] = w(kernel, norm, inv_h, r[i])
         dw_out[i] = grad_factor(kernel, norm, inv_h, r[i]) * r[i]
 
-    return shape, shape_dq, w, grad_factor, evaluate
+    return SimpleNamespace(shape=shape, shape_dq=shape_dq, w=w, grad_factor=grad_factor, evaluate=evaluate)
 
 
-def evaluate(kernel: str, dim: int, h: float, r, precision: str = "float64", device: str = "cpu"):
-    """W(r) and dW/dr at the distances ``r`` (host arrays), computed by the device functions."""
+def evaluate(kernel: str, dim: int, h: float, r, precision: str = "float64", device: str = None):
+    """W(r) and dW/dr at the distances ``r`` (host arrays), computed by the device functions (on
+    ``device``, default config.default_device())."""
+    device = device or default_device()
     scalar = wp.float64 if precision == "float64" else wp.float32
-    *_, kern = build(scalar)
+    kern = build(scalar).evaluate
     r_dev = wp.array(np.asarray(r, dtype=np.float64), dtype=scalar, device=device)
     w_dev = wp.zeros_like(r_dev)
     dw_dev = wp.zeros_like(r_dev)

@@ -12,6 +12,7 @@ Periodic axes wrap both the cell search and the separation vector (minimum image
 
 import functools
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import warp as wp
@@ -159,8 +160,10 @@ def build(scalar):
             n = grid.max_neighbours
         count[i] = n
 
-    return (Grid, separation, cell_keys, cell_ranges, gather_sorted, neighbour_list, check_displacement, mark_built,
-            cell_coord, neighbour_cell)
+    return SimpleNamespace(Grid=Grid, separation=separation, cell_keys=cell_keys, cell_ranges=cell_ranges,
+                           gather_sorted=gather_sorted, neighbour_list=neighbour_list,
+                           check_displacement=check_displacement, mark_built=mark_built, cell_coord=cell_coord,
+                           neighbour_cell=neighbour_cell)
 
 
 class NeighbourList:
@@ -171,8 +174,8 @@ class NeighbourList:
     def __init__(self, scalar, dim: int, support: float, lo, hi, periodic, ptype: wp.array,
                  needs_list: wp.array, max_neighbours: int, launcher):
         """``ptype`` and ``needs_list`` are the solver's own device arrays (it may reorder them)."""
-        (Grid, self._separation, self._cell_keys, self._cell_ranges, self._gather_sorted, self._neighbour_list,
-         self._check_displacement, self._mark_built, _, _) = build(scalar)
+        self._passes = build(scalar)
+        Grid = self._passes.Grid
         n = needs_list.shape[0]
         self.n = n
         self.launcher = launcher
@@ -219,13 +222,13 @@ class NeighbourList:
 
     def moved(self, pos: wp.array):
         """Note the particles' new positions: the lists go stale if any moved too far."""
-        wp.launch(self._check_displacement, dim=self.n, inputs=[self.grid, pos, self._x_build, self.stale],
+        wp.launch(self._passes.check_displacement, dim=self.n, inputs=[self.grid, pos, self._x_build, self.stale],
                   device=self.device)
 
     def sort(self, pos: wp.array) -> wp.array:
         """Sort the particles by cell; returns the particle index of each sorted position."""
         n = self.n
-        wp.launch(self._cell_keys, dim=n, inputs=[self.grid, pos, self._keys, self._order], device=self.device)
+        wp.launch(self._passes.cell_keys, dim=n, inputs=[self.grid, pos, self._keys, self._order], device=self.device)
         wp.utils.radix_sort_pairs(self._keys, self._order, n)
         return self._order
 
@@ -237,13 +240,13 @@ class NeighbourList:
         self.sort(pos)
         self._start.zero_()
         self._end.zero_()
-        wp.launch(self._cell_ranges, dim=n, inputs=[n, self._keys, self._start, self._end], device=self.device)
-        wp.launch(self._gather_sorted, dim=n, inputs=[self._order, pos, self._ptype, self._pos_sorted,
+        wp.launch(self._passes.cell_ranges, dim=n, inputs=[n, self._keys, self._start, self._end], device=self.device)
+        wp.launch(self._passes.gather_sorted, dim=n, inputs=[self._order, pos, self._ptype, self._pos_sorted,
                                                      self._ptype_sorted], device=self.device)
-        self.launcher(self._neighbour_list, n, [self.grid, self._pos_sorted, self._ptype_sorted, self._order,
+        self.launcher(self._passes.neighbour_list, n, [self.grid, self._pos_sorted, self._ptype_sorted, self._order,
                                                 self._start, self._end, self.nbr, self.count, self._needs_list,
                                                 self.stale, self._x_build, self.overflow])
-        wp.launch(self._mark_built, dim=1, inputs=[self.stale, self.builds], device=self.device)
+        wp.launch(self._passes.mark_built, dim=1, inputs=[self.stale, self.builds], device=self.device)
 
     @property
     def cell_start(self) -> wp.array:

@@ -1,125 +1,54 @@
 """The passes of one solver step, one Warp kernel each, compiled once per floating-point type.
 
 Models are chosen at run time through integer ids held in ``Params`` (see kernels.KERNEL_ID,
-viscosity.VISCOSITY_ID, boundaries.BOUNDARY_ID, density.DENSITY_DIFFUSION_ID); the physics of
-each model lives in its own module and is only combined here.
+viscosity.VISCOSITY_ID, boundaries.BOUNDARY_ID, density.DENSITY_DIFFUSION_ID); each equation
+lives in the module of its family (kernels, eos, momentum, viscosity, density, xsph, boundaries)
+and is only combined here. The run-safety checks are health.py's.
 
 Step (predictor-corrector as GPUSPH, Herault et al. 2010):
   neighbours(x_n) -> eos -> [sps] -> interact(n) -> choose_dt
   -> integrate(dt/2) -> eos -> [sps] -> interact(n+1/2) -> integrate(dt) into the candidate state
-  -> health(candidate) -> [census(candidate) -> census_check, every few steps]
-  -> commit (only if healthy) -> tick -> [shepard every N steps]
+  -> health.check_particles(candidate) -> [health.census(candidate) -> health.census_check, every few
+  steps] -> commit (only if healthy) -> tick -> [shepard every N steps]
 The committed state is never overwritten by a candidate that failed a health check.
-
-Health checks (CHECKS), each a way a run fails:
-- non_finite: NaN or infinity in a position, velocity or density;
-- outside_domain: a fluid particle left the domain (the tank, its walls and headroom);
-- density_bounds: a density outside [rho_min, rho_max] (0.8 and 1.25 rho0 by default);
-- wall_penetration: a fluid particle more than ``penetration_ratio`` dx beyond a wall face of the
-  tank, or as deep inside a solid box: the boundary let it through;
-- clumping: more than ``clump_fraction`` of the fluid particles have a fluid neighbour closer
-  than ``clump_ratio`` dx, marked in the force pass (the tensile and pairing instabilities pair
-  particles long before anything is infinite; a few pairs in a splash are no failure);
-- energy_growth: the fluid's kinetic + potential + elastic energy (Tait law integrated,
-  e(rho) = B/rho0 ((rho/rho0)^(gamma-1) - 1)/(gamma-1) + B (1/rho - 1/rho0)) more than
-  ``energy_growth_ratio`` M g H above its value at the start: in a closed tank with no inflow
-  every term of the scheme conserves or dissipates it, so growth is the integrator going unstable.
 """
 
 import functools
+from types import SimpleNamespace
 
 import warp as wp
 
-from . import boundaries, density, eos, kernels, neighbours, viscosity
+from . import boundaries, density, eos, health, kernels, momentum, neighbours, state, viscosity, xsph
 
-FLUID = 0
-BOUNDARY = 1
-
-# health checks, in the order they are reported
-CHECKS = ("non_finite", "outside_domain", "density_bounds", "wall_penetration", "clumping", "energy_growth")
-# checks of the whole state, not of one particle
-GLOBAL_CHECKS = ("energy_growth",)
-N_CHECKS = len(CHECKS)
-NO_FAILURE = 2 ** 31 - 1
+FLUID = state.FLUID
+BOUNDARY = state.BOUNDARY
 DYNAMIC = boundaries.BOUNDARY_ID["dynamic"]
 LENNARD_JONES = boundaries.BOUNDARY_ID["lennard_jones"]
 ARTIFICIAL = viscosity.VISCOSITY_ID["artificial"]
 SPS = viscosity.VISCOSITY_ID["sps"]
-WALL_PENETRATION = CHECKS.index("wall_penetration")
-CLUMPING = CHECKS.index("clumping")
-ENERGY_GROWTH = CHECKS.index("energy_growth")
 
 
 @functools.lru_cache(maxsize=None)
 def build(scalar):
     vec = wp.types.vector(3, scalar)
     mat33 = wp.types.matrix((3, 3), scalar)
-    _, _, kernel_w, grad_factor, _ = kernels.build(scalar)
-    eos_pressure, _, _ = eos.build(scalar)
-    visc_artificial, visc_laminar, sps_stress, sps_accel = viscosity.build(scalar)
-    continuity, delta_diffusion = density.build(scalar)
-    lennard_jones, monaghan_kajtar, plane_kernel_flux = boundaries.build(scalar)
-    Grid, separation, *_ = neighbours.build(scalar)
-
-    @wp.struct
-    class Params:
-        dim: int
-        kernel: int
-        norm: scalar
-        h: scalar
-        inv_h: scalar
-        eta2: scalar  # 0.01 h^2 regulariser
-        viscosity: int
-        alpha: scalar
-        nu: scalar
-        cs_dl2: scalar
-        ci_dl2: scalar
-        boundary: int
-        lj_d: scalar
-        lj_r0: scalar
-        mk_k: scalar
-        mk_beta: scalar
-        plane_r0: scalar
-        delta_hc0: scalar  # delta h c0, 0 when density diffusion is off
-        xsph_eps: scalar  # 0 when XSPH is off
-        rho0: scalar
-        eos_b: scalar
-        gamma: scalar
-        c0: scalar
-        gravity: vec
-        lo: vec
-        hi: vec
-        periodic: wp.vec3i
-        rho_min: scalar
-        rho_max: scalar
-        cfl: scalar
-        dt_fixed: wp.float64
-        settle_tau: wp.float64  # velocity relaxation time while settling; 0 = off
-        settle_until: wp.float64
-        n_planes: int
-        wall_lo: vec
-        wall_hi: vec
-        penetration: scalar  # penetration_ratio dx
-        n_solids: int
-        clump_r: scalar  # clump_ratio dx
-        clump_fraction: wp.float64
-        n_fluid: int
-        energy_slack: wp.float64  # energy_growth_ratio M g H; 0 = off
-
-    @wp.struct
-    class Fields:
-        """One particle state (the committed one or the half step) and what every pass reads."""
-
-        pos: wp.array(dtype=vec)
-        vel: wp.array(dtype=vec)
-        rho: wp.array(dtype=scalar)
-        pressure: wp.array(dtype=scalar)
-        p_rho2: wp.array(dtype=scalar)  # p / rho^2, once per particle instead of once per pair
-        mass: wp.array(dtype=scalar)
-        ptype: wp.array(dtype=wp.int32)
-        body: wp.array(dtype=wp.int32)
-        tau_diag: wp.array(dtype=vec)  # SPS stress / rho: xx, yy, zz
-        tau_off: wp.array(dtype=vec)  # xy, xz, yz
+    S = state.build(scalar)
+    Params, Fields = S.Params, S.Fields
+    K = kernels.build(scalar)
+    kernel_w, grad_factor = K.w, K.grad_factor
+    eos_pressure = eos.build(scalar).pressure
+    pressure_gradient = momentum.build(scalar).pressure_gradient
+    V = viscosity.build(scalar)
+    visc_artificial, visc_laminar, sps_stress, sps_accel = V.artificial, V.laminar, V.sps_stress, V.sps_accel
+    D = density.build(scalar)
+    continuity, delta_diffusion, shepard_density = D.continuity, D.delta_diffusion, D.shepard
+    xsph_velocity = xsph.build(scalar).xsph_velocity
+    B = boundaries.build(scalar)
+    lennard_jones, monaghan_kajtar, plane_wall = B.lennard_jones, B.monaghan_kajtar, B.plane_wall
+    N = neighbours.build(scalar)
+    Grid, separation = N.Grid, N.separation
+    H = health.build(scalar)
+    healthy = H.healthy
 
     @wp.func
     def pair(p: Params, f: Fields, a: int, b: int, r_ab: vec):
@@ -146,7 +75,7 @@ def build(scalar):
         drho = continuity(m_b, u_ab, grad)
         if t_b == FLUID and p.delta_hc0 > scalar(0.0):
             drho += delta_diffusion(p.delta_hc0, rho_a, rho_b, m_b, r_ab, grad, r2_eta, p.gravity, p.rho0, p.c0)
-        acc = -m_b * (f.p_rho2[a] + f.p_rho2[b]) * grad
+        acc = pressure_gradient(m_b, f.p_rho2[a], f.p_rho2[b], grad)
         if p.viscosity == ARTIFICIAL:
             # c0 for the mean sound speed, as GPUSPH: weak compressibility keeps c within ~1% of c0
             acc += visc_artificial(p.alpha, p.h, p.c0, scalar(0.5) * (rho_a + rho_b), m_b, u_ab, r_ab, r2_eta,
@@ -157,17 +86,9 @@ def build(scalar):
                 acc += sps_accel(m_b, rho_a, rho_b, f.tau_diag[a], f.tau_off[a], f.tau_diag[b], f.tau_off[b], grad)
         xsph = zero
         if t_b == FLUID and p.xsph_eps > scalar(0.0):
-            xsph = -p.xsph_eps * m_b / (scalar(0.5) * (rho_a + rho_b)) * kernel_w(p.kernel, p.norm, p.inv_h, r) * u_ab
+            xsph = xsph_velocity(p.xsph_eps, m_b, rho_a, rho_b, kernel_w(p.kernel, p.norm, p.inv_h, r), u_ab)
         mu = wp.abs(wp.dot(u_ab, r_ab)) / r2_eta
         return acc, drho, xsph, mu
-
-    @wp.func
-    def healthy(fail: wp.array(dtype=wp.int32)) -> bool:
-        bad = int(0)
-        for k in range(N_CHECKS):
-            if fail[k] != NO_FAILURE:
-                bad = 1
-        return bad == 0
 
     @wp.func
     def track_max(maxima: wp.array(dtype=scalar), k: int, value: scalar):
@@ -237,12 +158,10 @@ def build(scalar):
                 p_i = wp.max(f.pressure[i], scalar(0.0))
                 for k in range(p.n_planes):
                     n_k = plane_normal[k]
-                    d = wp.dot(xi - plane_point[k], n_k)
-                    flux = plane_kernel_flux(p.kernel, p.norm, p.inv_h, p.dim, d)
-                    if flux > scalar(0.0):
-                        a += scalar(2.0) * p_i / rho_i * flux * n_k
-                        dr -= scalar(2.0) * rho_i * wp.dot(ui, n_k) * flux
-                        a += lennard_jones(p.lj_d, p.plane_r0, d * n_k, d)
+                    da, ddr = plane_wall(p.kernel, p.norm, p.inv_h, p.dim, wp.dot(xi - plane_point[k], n_k), n_k,
+                                         p_i, rho_i, ui, p.lj_d, p.plane_r0)
+                    a += da
+                    dr += ddr
             track_max(maxima, 2 * chunk, wp.length(a))
             track_max(maxima, 2 * chunk + 1, mu_max)
         else:
@@ -326,74 +245,6 @@ def build(scalar):
         vel_out[i] = u
 
     @wp.kernel(enable_backward=False, module="unique")
-    def health(p: Params, pos: wp.array(dtype=vec), vel: wp.array(dtype=vec), rho: wp.array(dtype=scalar),
-               ptype: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32), solid_lo: wp.array(dtype=vec),
-               solid_hi: wp.array(dtype=vec), fail: wp.array(dtype=wp.int32)):
-        """Flags each check a particle of the candidate state fails, by the caller's particle id
-        (the slots are re-sorted by later steps of the batch)."""
-        i = wp.tid()
-        pid = ids[i]
-        x = pos[i]
-        r = rho[i]
-        if wp.isnan(x) or wp.isinf(x) or wp.isnan(vel[i]) or wp.isinf(vel[i]) or wp.isnan(r) or wp.isinf(r):
-            wp.atomic_min(fail, 0, pid)
-            return
-        if ptype[i] == FLUID:
-            for ax in range(3):
-                if x[ax] < p.lo[ax] or x[ax] > p.hi[ax]:
-                    wp.atomic_min(fail, 1, pid)
-                if x[ax] < p.wall_lo[ax] - p.penetration or x[ax] > p.wall_hi[ax] + p.penetration:
-                    wp.atomic_min(fail, WALL_PENETRATION, pid)
-            for k in range(p.n_solids):
-                lo = solid_lo[k]
-                hi = solid_hi[k]
-                outside = int(0)
-                for ax in range(p.dim):
-                    if x[ax] <= lo[ax] + p.penetration or x[ax] >= hi[ax] - p.penetration:
-                        outside = 1
-                if outside == 0:
-                    wp.atomic_min(fail, WALL_PENETRATION, pid)
-        if r < p.rho_min or r > p.rho_max:
-            wp.atomic_min(fail, 2, pid)
-
-    @wp.kernel(enable_backward=False, module="unique")
-    def census(p: Params, pos: wp.array(dtype=vec), vel: wp.array(dtype=vec), rho: wp.array(dtype=scalar),
-               mass: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32),
-               clumped: wp.array(dtype=wp.int32), total: wp.array(dtype=wp.float64), count: wp.array(dtype=wp.int32)):
-        """total[0] += the fluid's kinetic + potential + elastic energy; count = [clumped fluid
-        particles, the first of them] (one launch: atomics)."""
-        i = wp.tid()
-        if ptype[i] != FLUID:
-            return
-        if clumped[i] != 0:
-            wp.atomic_add(count, 0, 1)
-            wp.atomic_min(count, 1, ids[i])
-        u = vel[i]
-        ratio = rho[i] / p.rho0
-        elastic = (p.eos_b / p.rho0 * (wp.pow(ratio, p.gamma - scalar(1.0)) - scalar(1.0)) / (p.gamma - scalar(1.0))
-                   + p.eos_b * (scalar(1.0) / rho[i] - scalar(1.0) / p.rho0))
-        e = mass[i] * (scalar(0.5) * wp.dot(u, u) - wp.dot(p.gravity, pos[i]) + elastic)
-        wp.atomic_add(total, 0, wp.float64(e))
-
-    @wp.kernel(enable_backward=False, module="unique")
-    def census_check(p: Params, total: wp.array(dtype=wp.float64), count: wp.array(dtype=wp.int32),
-                     fail: wp.array(dtype=wp.int32)):
-        """total = [candidate's energy, energy at the start (or +inf before the first check), the
-        largest clumped fraction seen]: flags energy_growth when the candidate exceeds the start by
-        the slack, clumping when too many particles have clumped."""
-        e = total[0]
-        if total[1] == wp.float64(1.0e300):
-            total[1] = e
-        if p.energy_slack > wp.float64(0.0) and e > total[1] + p.energy_slack:
-            fail[ENERGY_GROWTH] = 0
-        fraction = wp.float64(count[0]) / wp.float64(p.n_fluid)
-        total[2] = wp.max(total[2], fraction)
-        if p.clump_r > scalar(0.0) and fraction > p.clump_fraction:
-            fail[CLUMPING] = count[1]
-        count[0] = 0  # ready for the next census
-        count[1] = NO_FAILURE
-
-    @wp.kernel(enable_backward=False, module="unique")
     def commit(fail: wp.array(dtype=wp.int32), pos_new: wp.array(dtype=vec), vel_new: wp.array(dtype=vec),
                rho_new: wp.array(dtype=scalar), pos: wp.array(dtype=vec), vel: wp.array(dtype=vec),
                rho: wp.array(dtype=scalar)):
@@ -436,22 +287,15 @@ def build(scalar):
     @wp.kernel(enable_backward=False, module="unique")
     def shepard(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32), f: Fields,
                 rho_out: wp.array(dtype=scalar), chunk: int, stride: int):
-        """rho_a = sum_b m_b W_ab / sum_b (m_b / rho_b) W_ab, the particle itself included (Eq. 2.28)."""
+        """The Shepard filter (density.shepard, thesis Eq. 2.28) on the fluid; boundaries keep theirs."""
         i = wp.tid() * stride + chunk
         if f.ptype[i] != FLUID:
             rho_out[i] = f.rho[i]
             return
-        w0 = kernel_w(p.kernel, p.norm, p.inv_h, scalar(0.0))
-        num = f.mass[i] * w0
-        den = f.mass[i] / f.rho[i] * w0
-        base = i * grid.max_neighbours
-        for k in range(count[i]):
-            j = nbr[base + k]
-            if f.ptype[j] == FLUID or p.boundary == DYNAMIC:
-                wk = kernel_w(p.kernel, p.norm, p.inv_h, wp.length(separation(grid, f.pos[i], f.pos[j])))
-                num += f.mass[j] * wk
-                den += f.mass[j] / f.rho[j] * wk
-        rho_out[i] = num / den
+        rho_out[i] = shepard_density(p.kernel, p.norm, p.inv_h, p.boundary == DYNAMIC, grid, nbr, count, i, f.pos,
+                                     f.rho, f.mass, f.ptype)
 
-    return (Params, Fields, equation_of_state, sps_strain, interact, choose_dt, integrate, health, census,
-            census_check, commit, tick, shepard, permute)
+    return SimpleNamespace(Params=Params, Fields=Fields, equation_of_state=equation_of_state, sps_strain=sps_strain,
+                           interact=interact, choose_dt=choose_dt, integrate=integrate,
+                           check_particles=H.check_particles, census=H.census, census_check=H.census_check,
+                           commit=commit, tick=tick, shepard=shepard, permute=permute)

@@ -12,13 +12,12 @@ from dataclasses import dataclass, field
 import numpy as np
 import warp as wp
 
-from . import boundaries, density, kernels, passes, viscosity
+from . import boundaries, density, health, kernels, passes, viscosity
 from .config import SolverConfig
+from .health import HealthError
 from .launch import Launcher
 from .neighbours import NeighbourList, NeighbourOverflow
-
-FLUID = passes.FLUID
-BOUNDARY = passes.BOUNDARY
+from .state import FLUID
 
 _MAX_BATCH = 64  # steps launched between two reads of the clock
 # steps between two sorts of the particle arrays into cell order: neighbours then sit next to each
@@ -27,19 +26,6 @@ _REORDER_EVERY = 16
 # steps between two energy and clumping checks: the sums are one atomic launch, cheap but not free
 # on a GPU
 _CENSUS_EVERY = 16
-_NO_ENERGY = 1.0e300  # the energy check's "no reference yet"
-
-
-class HealthError(RuntimeError):
-    """A step failed a health check. The solver still holds the state from before that step."""
-
-    def __init__(self, check: str, step: int, time: float, particle: int, detail: str = ""):
-        self.check = check
-        self.step = step
-        self.time = time
-        self.particle = particle
-        super().__init__(f"health check '{check}' failed at step {step} (t = {time:.6g} s), "
-                         f"particle {particle}{': ' + detail if detail else ''}")
 
 
 @dataclass
@@ -92,9 +78,7 @@ class Solver:
         self.n = len(particles)
         if self.n == 0:
             raise ValueError("particles: the particle set is empty")
-        (self._Params, self._Fields, self._eos, self._sps, self._interact, self._choose_dt, self._integrate,
-         self._health, self._census, self._census_check, self._commit, self._tick, self._shepard,
-         self._permute) = passes.build(self.scalar)
+        self._passes = passes.build(self.scalar)
         self._fluid_mass = float(particles.mass[particles.ptype == FLUID].sum())
         self.n_fluid = int((particles.ptype == FLUID).sum())
         self.params = self._make_params()
@@ -110,7 +94,7 @@ class Solver:
     # -- set-up -------------------------------------------------------------------------
     def _make_params(self):
         cfg = self.config
-        p = self._Params()
+        p = self._passes.Params()
         g = cfg.g_norm
         p.dim = cfg.dim
         p.kernel = kernels.KERNEL_ID[cfg.kernel]
@@ -124,11 +108,8 @@ class Solver:
         p.cs_dl2 = (cfg.sps_cs * cfg.dx) ** 2
         p.ci_dl2 = cfg.sps_ci * cfg.dx ** 2
         p.boundary = boundaries.BOUNDARY_ID[cfg.boundary]
-        p.lj_d = 5.0 * g * cfg.depth
-        p.lj_r0 = cfg.dx
-        p.mk_k = g * cfg.depth
-        p.mk_beta = cfg.mk_beta ** (cfg.dim - 1)  # see boundaries: force per unit wall area
-        p.plane_r0 = 0.5 * cfg.dx
+        for name, value in boundaries.wall_constants(g, cfg.depth, cfg.dx, cfg.mk_beta, cfg.dim).items():
+            setattr(p, name, value)
         p.delta_hc0 = (cfg.delta * cfg.h * cfg.sound_speed
                        if density.DENSITY_DIFFUSION_ID[cfg.density_diffusion] else 0.0)
         p.xsph_eps = cfg.xsph_eps if cfg.xsph else 0.0
@@ -197,18 +178,18 @@ class Solver:
         solids = cfg.solids or [((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))]
         self._solid_lo = arr(np.asarray([lo for lo, _ in solids], dtype=np.float64), v)
         self._solid_hi = arr(np.asarray([hi for _, hi in solids], dtype=np.float64), v)
-        self._fail = arr(np.full(passes.N_CHECKS, passes.NO_FAILURE, dtype=np.int32), wp.int32)
+        self._fail = arr(np.full(health.N_CHECKS, health.NO_FAILURE, dtype=np.int32), wp.int32)
         # candidate's energy, energy at the start, the largest clumped fraction seen
-        # (passes.census_check); clumped fluid particles and the first of them
-        self._energy_sum = arr(np.array([0.0, _NO_ENERGY, 0.0]), wp.float64)
+        # (health.census_check); clumped fluid particles and the first of them
+        self._energy_sum = arr(np.array([0.0, health.NO_ENERGY, 0.0]), wp.float64)
         self._clumped = wp.zeros(n, dtype=wp.int32, device=dev)
-        self._clump_count = arr(np.array([0, passes.NO_FAILURE], dtype=np.int32), wp.int32)
+        self._clump_count = arr(np.array([0, health.NO_FAILURE], dtype=np.int32), wp.int32)
         self._clock = wp.zeros(4, dtype=wp.float64, device=dev)  # t, dt, stable dt, time of a failed step
         self._steps = arr(np.array([0, -1], dtype=np.int32), wp.int32)  # steps, failed step
-        wp.launch(self._eos, dim=n, inputs=[self.params, self._fields], device=dev)
+        wp.launch(self._passes.equation_of_state, dim=n, inputs=[self.params, self._fields], device=dev)
 
     def _make_fields(self, pos, vel, rho, shared: dict):
-        f = self._Fields()
+        f = self._passes.Fields()
         f.pos, f.vel, f.rho = pos, vel, rho
         for name, array in shared.items():
             setattr(f, name, array)
@@ -216,48 +197,48 @@ class Solver:
 
     # -- stepping -----------------------------------------------------------------------
     def _forces(self, f):
-        n, p, nl = self.n, self.params, self.neighbours
-        wp.launch(self._eos, dim=n, inputs=[p, f], device=self.device)
+        n, p, nl, k = self.n, self.params, self.neighbours, self._passes
+        wp.launch(k.equation_of_state, dim=n, inputs=[p, f], device=self.device)
         if self.config.viscosity == "sps":
-            self.launch(self._sps, n, [p, nl.grid, nl.nbr, nl.count, f])
-        self.launch(self._interact, n, [p, nl.grid, nl.nbr, nl.count, f, self._plane_pt, self._plane_n, self.acc,
-                                        self._drho, self._xsph, self._maxima, self._clumped])
+            self.launch(k.sps_strain, n, [p, nl.grid, nl.nbr, nl.count, f])
+        self.launch(k.interact, n, [p, nl.grid, nl.nbr, nl.count, f, self._plane_pt, self._plane_n, self.acc,
+                                    self._drho, self._xsph, self._maxima, self._clumped])
 
     def _reorder(self):
         state = [self.pos, self.vel, self.rho, self.mass, self.ptype, self.body, self.ids, self._needs_list]
         order = self.neighbours.sort(self.pos)
-        wp.launch(self._permute, dim=self.n, inputs=[order, *state, *self._sorted], device=self.device)
+        wp.launch(self._passes.permute, dim=self.n, inputs=[order, *state, *self._sorted], device=self.device)
         for dst, src in zip(state, self._sorted):
             wp.copy(dst, src)
         self.neighbours.stale.fill_(1)
 
     def _launch_step(self, t_target: float):
-        n, dev, p = self.n, self.device, self.params
+        n, dev, p, k = self.n, self.device, self.params, self._passes
         if self._launched % _REORDER_EVERY == 0:
             self._reorder()
         self.neighbours.rebuild(self.pos)
         self._maxima.zero_()
         self._forces(self._fields)
-        wp.launch(self._choose_dt, dim=1, inputs=[p, t_target, self._maxima, self._fail, self._clock], device=dev)
-        wp.launch(self._integrate, dim=n,
+        wp.launch(k.choose_dt, dim=1, inputs=[p, t_target, self._maxima, self._fail, self._clock], device=dev)
+        wp.launch(k.integrate, dim=n,
                   inputs=[p, self._clock, 0.5, self.pos, self.vel, self.rho, self.ptype, self.vel, self.acc,
                           self._drho, self._xsph, self._pos_h, self._vel_h, self._rho_h], device=dev)
         self._forces(self._fields_h)
-        wp.launch(self._integrate, dim=n,
+        wp.launch(k.integrate, dim=n,
                   inputs=[p, self._clock, 1.0, self.pos, self.vel, self.rho, self.ptype, self._vel_h, self.acc,
                           self._drho, self._xsph, self._pos_c, self._vel_c, self._rho_c], device=dev)
-        wp.launch(self._health, dim=n, inputs=[p, self._pos_c, self._vel_c, self._rho_c, self.ptype, self.ids,
-                                               self._solid_lo, self._solid_hi, self._fail], device=dev)
+        wp.launch(k.check_particles, dim=n, inputs=[p, self._pos_c, self._vel_c, self._rho_c, self.ptype, self.ids,
+                                                    self._solid_lo, self._solid_hi, self._fail], device=dev)
         if self._launched % _CENSUS_EVERY == 0:
             self._energy_sum[0:1].zero_()
-            wp.launch(self._census, dim=n, inputs=[p, self._pos_c, self._vel_c, self._rho_c, self.mass, self.ptype,
-                                                   self.ids, self._clumped, self._energy_sum, self._clump_count],
+            wp.launch(k.census, dim=n, inputs=[p, self._pos_c, self._vel_c, self._rho_c, self.mass, self.ptype,
+                                               self.ids, self._clumped, self._energy_sum, self._clump_count],
                       device=dev)
-            wp.launch(self._census_check, dim=1, inputs=[p, self._energy_sum, self._clump_count, self._fail],
+            wp.launch(k.census_check, dim=1, inputs=[p, self._energy_sum, self._clump_count, self._fail],
                       device=dev)
-        wp.launch(self._commit, dim=n, inputs=[self._fail, self._pos_c, self._vel_c, self._rho_c, self.pos,
-                                               self.vel, self.rho], device=dev)
-        wp.launch(self._tick, dim=1, inputs=[self._fail, self._clock, self._steps], device=dev)
+        wp.launch(k.commit, dim=n, inputs=[self._fail, self._pos_c, self._vel_c, self._rho_c, self.pos,
+                                           self.vel, self.rho], device=dev)
+        wp.launch(k.tick, dim=1, inputs=[self._fail, self._clock, self._steps], device=dev)
         self.neighbours.moved(self.pos)
         self._launched += 1
         every = self.config.shepard_every
@@ -269,7 +250,7 @@ class Solver:
         nl = self.neighbours
         if rebuild:
             nl.rebuild(self.pos, force=True)
-        self.launch(self._shepard, self.n, [self.params, nl.grid, nl.nbr, nl.count, self._fields, self._rho_c])
+        self.launch(self._passes.shepard, self.n, [self.params, nl.grid, nl.nbr, nl.count, self._fields, self._rho_c])
         wp.copy(self.rho, self._rho_c)
 
     def _sync(self):
@@ -279,10 +260,10 @@ class Solver:
         fail = self._fail.numpy()
         self.time, self.dt, self.dt_stable = float(clock[0]), float(clock[1]), float(clock[2])
         self.steps = int(steps[0])
-        for check, idx in zip(passes.CHECKS, fail):
-            if idx == passes.NO_FAILURE:
+        for check, idx in zip(health.CHECKS, fail):
+            if idx == health.NO_FAILURE:
                 continue
-            if check in passes.GLOBAL_CHECKS:
+            if check in health.GLOBAL_CHECKS:
                 e = self._energy_sum.numpy()
                 raise HealthError(check, int(steps[1]), float(clock[3]), -1,
                                   f"fluid energy {e[0]:.6g} J, {e[0] - e[1]:.3g} J above its start "
@@ -347,7 +328,7 @@ class Solver:
 
     def clear_failure(self):
         """Forget a reported failure so the run can go on (e.g. after changing dt_fixed)."""
-        self._fail.assign(np.full(passes.N_CHECKS, passes.NO_FAILURE, dtype=np.int32))
+        self._fail.assign(np.full(health.N_CHECKS, health.NO_FAILURE, dtype=np.int32))
         self._steps.assign(np.array([self._steps.numpy()[0], -1], dtype=np.int32))
         self.neighbours.overflow.zero_()
 
@@ -355,7 +336,7 @@ class Solver:
     def update_pressure(self):
         """Bring the pressure array up to the current density (the step loop keeps it only where
         the force passes need it)."""
-        wp.launch(self._eos, dim=self.n, inputs=[self.params, self._fields], device=self.device)
+        wp.launch(self._passes.equation_of_state, dim=self.n, inputs=[self.params, self._fields], device=self.device)
 
     def snapshot(self) -> dict:
         """Host copies of the state in the caller's particle order: pos, vel (n x 3), rho, pressure,

@@ -1,8 +1,8 @@
 """Diffusion terms of the momentum equation (thesis Eq. 2.15), chosen by name.
 
-- artificial: Monaghan 1992 artificial viscosity, Pi_ab = -alpha c_ab mu_ab / rho_ab for
-  approaching pairs, mu_ab = h u_ab.r_ab / (r_ab^2 + 0.01 h^2) (the 0.01 h^2 regulariser as
-  GPUSPH and DualSPHysics).
+- artificial: Monaghan 1992 artificial viscosity (not in the thesis, which ran laminar and SPS),
+  Pi_ab = -alpha c_ab mu_ab / rho_ab for approaching pairs, mu_ab = h u_ab.r_ab / (r_ab^2 + 0.01 h^2)
+  (the 0.01 h^2 regulariser as GPUSPH and DualSPHysics).
 - laminar: thesis Eq. 2.16-2.17 (Lo & Shao 2002; Morris et al. 1997 form).
 - sps: laminar plus the Sub-Particle-Scale stress of Dalrymple & Rogers 2006, thesis Eq.
   2.18-2.21. The thesis prints the isotropic part as C_I dl^2 |S|; dimensional consistency and
@@ -10,6 +10,7 @@
 """
 
 import functools
+from types import SimpleNamespace
 
 import warp as wp
 
@@ -64,4 +65,4 @@ def build(scalar):
                          o[0] * grad[0] + d[1] * grad[1] + o[2] * grad[2],
                          o[1] * grad[0] + o[2] * grad[1] + d[2] * grad[2])
 
-    return artificial, laminar, sps_stress, sps_accel
+    return SimpleNamespace(artificial=artificial, laminar=laminar, sps_stress=sps_stress, sps_accel=sps_accel)

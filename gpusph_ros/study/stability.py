@@ -2,7 +2,7 @@
 coefficient of each combination of kernel x viscosity x boundary x density treatment, on a small
 dam break, and how each failure showed itself.
 
-A run is stable when it reaches the end time with every health check quiet (``sph.passes.CHECKS``:
+A run is stable when it reaches the end time with every health check quiet (``sph.health.CHECKS``:
 NaN, leaving the domain, density bounds, wall penetration, clumping, energy growth) and the
 neighbour lists never overflow. Each limit is found by bisection on a log scale between a
 stable and an unstable value (``search``), each probe a run from rest. The CFL search keeps the

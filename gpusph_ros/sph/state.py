@@ -1,0 +1,77 @@
+"""What every pass reads: the particle kinds, the run's constants (``Params``) and one particle
+state (``Fields``), as Warp structs compiled once per floating-point type."""
+
+import functools
+from types import SimpleNamespace
+
+import warp as wp
+
+FLUID = 0
+BOUNDARY = 1
+
+
+@functools.lru_cache(maxsize=None)
+def build(scalar):
+    vec = wp.types.vector(3, scalar)
+
+    @wp.struct
+    class Params:
+        dim: int
+        kernel: int
+        norm: scalar
+        h: scalar
+        inv_h: scalar
+        eta2: scalar  # 0.01 h^2 regulariser
+        viscosity: int
+        alpha: scalar
+        nu: scalar
+        cs_dl2: scalar
+        ci_dl2: scalar
+        boundary: int
+        lj_d: scalar
+        lj_r0: scalar
+        mk_k: scalar
+        mk_beta: scalar
+        plane_r0: scalar
+        delta_hc0: scalar  # delta h c0, 0 when density diffusion is off
+        xsph_eps: scalar  # 0 when XSPH is off
+        rho0: scalar
+        eos_b: scalar
+        gamma: scalar
+        c0: scalar
+        gravity: vec
+        lo: vec
+        hi: vec
+        periodic: wp.vec3i
+        rho_min: scalar
+        rho_max: scalar
+        cfl: scalar
+        dt_fixed: wp.float64
+        settle_tau: wp.float64  # velocity relaxation time while settling; 0 = off
+        settle_until: wp.float64
+        n_planes: int
+        wall_lo: vec
+        wall_hi: vec
+        penetration: scalar  # penetration_ratio dx
+        n_solids: int
+        clump_r: scalar  # clump_ratio dx
+        clump_fraction: wp.float64
+        n_fluid: int
+        energy_slack: wp.float64  # energy_growth_ratio M g H; 0 = off
+
+    @wp.struct
+    class Fields:
+        """One particle state (the committed one or the half step) and what every pass reads."""
+
+        pos: wp.array(dtype=vec)
+        vel: wp.array(dtype=vec)
+        rho: wp.array(dtype=scalar)
+        pressure: wp.array(dtype=scalar)
+        p_rho2: wp.array(dtype=scalar)  # p / rho^2, once per particle instead of once per pair
+        mass: wp.array(dtype=scalar)
+        ptype: wp.array(dtype=wp.int32)
+        body: wp.array(dtype=wp.int32)
+        tau_diag: wp.array(dtype=vec)  # SPS stress / rho: xx, yy, zz
+        tau_off: wp.array(dtype=vec)  # xy, xz, yz
+
+    return SimpleNamespace(Params=Params, Fields=Fields)
