@@ -25,9 +25,10 @@ from pathlib import Path
 
 import warp as wp
 
+from series import model_of_about
+
 BENCH = Path(__file__).resolve().parent
 SCENE = "dambreak1_thesis"
-# particles of DamBreak 1 scale as dx^-3 from 16,898 at 3 cm
 TARGETS = (1e4, 1e5, 1e6)
 
 
@@ -40,29 +41,14 @@ def _median_ms(fn, repeat):
     return statistics.median(times) * 1e3, out
 
 
-def _model_of_about(target: float, device: str):
-    """DamBreak 1 at the spacing whose particle count is within 5% of ``target`` (the walls make
-    the count scale between dx^-2 and dx^-3)."""
-    from gpusph_ros.scenes.build import build
-    from gpusph_ros.scenes.schema import load_scene
-
-    scene, dx = load_scene(SCENE), 0.03 * (16898 / target) ** (1 / 3)
-    while True:
-        model = build(scene, dx=dx, device=device)
-        n = len(model.particles)
-        if abs(n / target - 1.0) < 0.05:
-            return model
-        dx *= (n / target) ** (1 / 2.5)
-
-
-def cloud(device: str, repeat: int):
+def cloud(device: str, repeat: int, targets=TARGETS):
     import rclpy
     from rclpy.serialization import serialize_message
     from sensor_msgs.msg import PointCloud2
 
     from gpusph_ros.measure.cloud import CloudPacker
-    from gpusph_ros.ros.messages import CloudBuilder
-    from gpusph_ros.ros.recording import BagRecorder
+    from gpusph_ros.output.messages import CloudBuilder
+    from gpusph_ros.output.recording import BagRecorder
     from gpusph_ros.sph import Solver
 
     rclpy.init()
@@ -72,8 +58,8 @@ def cloud(device: str, repeat: int):
     print(f"{'particles':>10} {'pack':>7} {'message':>8} {'serialise':>9} {'publish':>8} {'record':>7} "
           f"{'total':>8}  ms   {'MB':>6}")
     with tempfile.TemporaryDirectory() as tmp:
-        for target in TARGETS:
-            model = _model_of_about(target, device)
+        for target in targets:
+            model = model_of_about(SCENE, target, device=device)
             solver = Solver(model.config, model.particles)
             packer = CloudPacker(solver)
             builder = CloudBuilder(packer.fields)
@@ -144,10 +130,12 @@ def main():
     parser.add_argument("--device", default="cpu")
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--samples", type=int, default=20)
+    parser.add_argument("--particles", type=float, nargs="+", default=TARGETS,
+                        help="about how many particles each cloud case has")
     args = parser.parse_args()
     wp.config.log_level = wp.LOG_WARNING
     if "cloud" in args.parts:
-        cloud(args.device, args.repeat)
+        cloud(args.device, args.repeat, args.particles)
     if "response" in args.parts:
         response(args.device, args.samples)
 

@@ -16,8 +16,8 @@ import yaml
 
 from .measure.cloud import CloudPacker
 from .measure.suite import Measurements
-from .ros import messages
-from .ros.recording import BagRecorder, qos_yaml
+from .output import messages
+from .output.recording import BagRecorder, qos_yaml
 from .scenes.build import build_run
 from .sph import HealthError, NeighbourOverflow, Solver
 

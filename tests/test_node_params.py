@@ -9,6 +9,8 @@ from gpusph_ros.ros import node_params
 from gpusph_ros.ros.node_params import DEFAULTS, PARAMS, check, run_settings
 from gpusph_ros.scenes.schema import builtin_names
 
+pytestmark = pytest.mark.unit
+
 REPO = Path(__file__).resolve().parents[1]
 
 
@@ -78,3 +80,17 @@ def test_shipped_parameter_files_cover_every_scene_and_describe_runs():
         assert set(values) <= set(DEFAULTS), path
         assert values["scene"] == name
         assert check(_values(**values)) is None, path
+
+
+def test_every_live_parameter_reaches_the_session_as_its_settings():
+    """node_params.LIVE_SETTINGS is the one list of what applies live: each LIVE parameter comes to
+    settings in it, with the values the run would be built with."""
+    for p in PARAMS:
+        if p.applies == node_params.LIVE:
+            assert node_params.live_settings(_values(), [p.name]), p.name
+    assert node_params.live_settings(_values(cfl=0.2), ["cfl"]) == {"cfl": 0.2}
+    assert node_params.live_settings(_values(viscosity="laminar", sps=True), ["sps"]) == {"viscosity": "sps"}
+    settings = node_params.live_settings(_values(output_rate=50.0, publish_particles=False), ["publish_particles"])
+    assert settings == {"end_time": run_settings(_values())[1].output.end_time, "output_rate": 50.0,
+                        "particle_rate": 0.0}  # the outputs go as one
+    assert node_params.live_settings(_values(output_rate=50.0), ["output_rate"])["particle_rate"] == 50.0

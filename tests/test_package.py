@@ -3,7 +3,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
 from catkin_pkg.package import parse_package
+
+pytestmark = pytest.mark.ros
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -57,5 +60,13 @@ def test_solver_imports_nothing_from_ros():
     code = ("import sys, gpusph_ros.sph, gpusph_ros.scenes.boxes; "
             "bad = [m for m in sys.modules if m.split('.')[0] in ('rclpy', 'rosidl_runtime_py', 'sensor_msgs') "
             "or m.startswith('gpusph_ros.ros')]; print(bad); sys.exit(1 if bad else 0)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO)
+    assert out.returncode == 0, out.stdout + out.stderr
+
+
+def test_the_runner_stands_below_the_node():
+    """Layers point one way: the runner (and the output layer under it) import nothing of ros/."""
+    code = ("import sys, gpusph_ros.runner, gpusph_ros.output.recording; "
+            "bad = [m for m in sys.modules if m.startswith('gpusph_ros.ros')]; print(bad); sys.exit(1 if bad else 0)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO)
     assert out.returncode == 0, out.stdout + out.stderr

@@ -1,1 +1,1 @@
-"""The thin ROS 2 shell over the solver: node, message conversion, recording."""
+"""The ROS 2 node over the runner: sim_node, its parameters (node_params) and its solver thread (session)."""

@@ -41,12 +41,13 @@ PARAMS = (
     Param("scene", "dambreak1_thesis", "built-in scene name (" + ", ".join(builtin_names()) + ") or a path "
           "to a scene YAML file", RESET),
     Param("dx", 0.03, "particle spacing [m]", RESET, lo=0.001, hi=1.0),
-    Param("kernel", "cubic_spline", "smoothing kernel (thesis Eq. 2.6-2.8; wendland: Wendland C2)", LIVE,
+    Param("kernel", "cubic_spline", "smoothing kernel (quadratic: thesis Eq. 2.5-2.8; cubic_spline: Eq. 2.9-2.10; "
+          "wendland: Wendland C2)", LIVE,
           choices=KERNELS),
-    Param("viscosity", "artificial", "viscosity model: artificial (Monaghan 1992, thesis Eq. 2.14) or laminar "
-          "(Morris 1997, thesis Eq. 2.16)", LIVE, choices=VISCOSITY_CHOICES),
+    Param("viscosity", "artificial", "viscosity model: artificial (Monaghan 1992; not in the thesis) or laminar "
+          "(Morris 1997, thesis Eq. 2.16-2.17)", LIVE, choices=VISCOSITY_CHOICES),
     Param("sps", False, "add the sub-particle-scale turbulence stress to laminar viscosity (Dalrymple & Rogers "
-          "2006, thesis Eq. 2.17-2.20); needs viscosity laminar", LIVE),
+          "2006, thesis Eq. 2.18-2.21); needs viscosity laminar", LIVE),
     Param("boundary", "dynamic", "boundary particle model for walls the scene builds of particles", RESET,
           choices=BOUNDARIES),
     Param("density_diffusion", "delta", "density treatment: none, or delta-SPH (Molteni & Colagrossi 2009)", LIVE,
@@ -57,7 +58,7 @@ PARAMS = (
     Param("wall_planes", False, "every wall of boundary particles as a particle-less plane", RESET),
     Param("precision", "float32", "floating-point precision of the solver state", RESET, choices=PRECISIONS),
     Param("device", "cpu", "Warp device: cpu or cuda:N", RESET),
-    Param("cfl", 0.3, "Courant number of the adaptive time step (thesis Eq. 2.23)", LIVE, lo=0.01, hi=1.0),
+    Param("cfl", 0.3, "Courant number of the adaptive time step (Monaghan 1992, as GPUSPH)", LIVE, lo=0.01, hi=1.0),
     Param("c0", 0.0, "speed of sound [m/s]; 0 = 10 sqrt(g H) with the scene's depth H (thesis Section 2.3)",
           LIVE, lo=0.0, hi=1000.0),
     Param("end_time", 0.0, "simulated time the run stops at [s]; 0 = the scene's own", LIVE, lo=0.0, hi=1.0e5),
@@ -75,6 +76,14 @@ PARAMS = (
 )
 BY_NAME = {p.name: p for p in PARAMS}
 DEFAULTS = {p.name: p.default for p in PARAMS}
+
+# The one list of what a running session takes live, and where each setting goes: the solver's
+# numerics (Solver.reconfigure), the run's outputs (Run.set_output), the cloud (Run.set_cloud) or
+# the node's pacing. A LIVE parameter comes to the settings of the same name, except those below.
+LIVE_SETTINGS = {"kernel": "solver", "viscosity": "solver", "density_diffusion": "solver", "cfl": "solver",
+                 "c0": "solver", "end_time": "output", "output_rate": "output", "particle_rate": "output",
+                 "particle_fields": "cloud", "frame_id": "cloud", "real_time_factor": "pace"}
+_SETTINGS_OF = {"sps": ("viscosity",), "publish_particles": ("particle_rate",)}
 
 
 def applies_text(name: str) -> str:
@@ -128,6 +137,20 @@ def check(values: dict, changed=None):
     except ConfigError as err:
         return str(err)
     return None
+
+
+def live_settings(values: dict, changed) -> dict:
+    """The session settings (LIVE_SETTINGS) that a change of the live parameters ``changed`` comes
+    to, ``values`` being every parameter after the change. The outputs go as one: the clouds
+    follow output_rate, and an output time depends on both rate and end time."""
+    _, config = run_settings(values)
+    out = config.output
+    resolved = {**values, "viscosity": config.numerics["viscosity"], "end_time": out.end_time,
+                "output_rate": out.output_rate, "particle_rate": out.particle_rate}
+    touched = {s for name in changed for s in _SETTINGS_OF.get(name, (name,))}
+    if any(LIVE_SETTINGS.get(s) == "output" for s in touched):
+        touched |= {s for s, where in LIVE_SETTINGS.items() if where == "output"}
+    return {s: resolved[s] for s in touched if s in LIVE_SETTINGS}
 
 
 def run_settings(values: dict):

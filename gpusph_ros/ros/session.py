@@ -14,9 +14,7 @@ from pathlib import Path
 from rclpy.serialization import serialize_message
 
 from ..sph import HealthError, NeighbourOverflow
-
-_NUMERIC_LIVE = {"kernel", "viscosity", "density_diffusion", "cfl", "c0"}
-_OUTPUT_LIVE = {"end_time", "output_rate", "particle_rate"}
+from .node_params import LIVE_SETTINGS
 
 
 class Session:
@@ -119,10 +117,10 @@ class Session:
             self._pace = None
         if run is None:
             return
-        numerics = {k: v for k, v in changes.items() if k in _NUMERIC_LIVE}
+        numerics = {k: v for k, v in changes.items() if LIVE_SETTINGS[k] == "solver"}
         if numerics:
             run.solver.reconfigure(**numerics)
-        output = {k: v for k, v in changes.items() if k in _OUTPUT_LIVE}
+        output = {k: v for k, v in changes.items() if LIVE_SETTINGS[k] == "output"}
         if output:
             run.set_output(**output)
         if "particle_fields" in changes or "frame_id" in changes:
@@ -174,8 +172,7 @@ class Session:
 
     # -- requests from ROS callbacks -----------------------------------------------------------
     def change(self, **changes):
-        """Live changes (``_NUMERIC_LIVE``, ``_OUTPUT_LIVE``, particle_fields, frame_id,
-        real_time_factor), applied by the solver thread before its next step."""
+        """Live changes (node_params.LIVE_SETTINGS), applied by the solver thread before its next step."""
         with self._cond:
             self._pending.update(changes)
             self._cond.notify_all()

@@ -29,9 +29,10 @@ from sensor_msgs.msg import PointCloud2
 from std_srvs.srv import SetBool, Trigger
 
 from .. import __version__
+from ..output import messages
 from ..runner import CLOCK_QOS, PARTICLES_QOS, Run
 from ..sph import ConfigError
-from . import messages, node_params
+from . import node_params
 from .node_params import PARAMS
 from .session import Session
 
@@ -114,24 +115,11 @@ class SimNode(LifecycleNode):
         live = {k: v for k, v in changes.items() if node_params.BY_NAME[k].applies == node_params.LIVE}
         self.awaiting_reset |= {k for k in changes if node_params.BY_NAME[k].applies == node_params.RESET}
         if self.session.run is not None and live:
-            self.session.change(**self._live_settings(live))
+            self.session.change(**node_params.live_settings({**self.values(), **live}, live))
         if "record_dir" in changes and not changes["record_dir"]:
             self.session.stop_recording("stopped")
         if self.awaiting_reset & set(changes):
             self.get_logger().info(f"{', '.join(sorted(self.awaiting_reset))} changed: applies at the next ~/reset")
-
-    def _live_settings(self, live: dict) -> dict:
-        """Live parameter changes as the solver's and the run's settings."""
-        values = {**self.values(), **live}
-        scene, config = node_params.run_settings(values)
-        out = {k: v for k, v in live.items() if k in ("kernel", "cfl", "c0", "density_diffusion", "particle_fields",
-                                                       "frame_id", "real_time_factor")}
-        if {"viscosity", "sps"} & set(live):
-            out["viscosity"] = config.numerics["viscosity"]
-        if {"end_time", "output_rate", "publish_particles"} & set(live):
-            out.update(end_time=config.output.end_time, output_rate=config.output.output_rate,
-                       particle_rate=config.output.particle_rate)
-        return out
 
     # -- building ------------------------------------------------------------------------------
     def _build(self) -> Run:

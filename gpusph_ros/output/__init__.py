@@ -1,0 +1,3 @@
+"""What a run sends out, under the runner: ROS 2 messages built from the measurements (messages),
+their definitions for MCAP schemas (msgdefs) and the rosbag2 MCAP recorder (recording). Uses
+rclpy's message classes and serialisation, no node; ros/ holds the node, above the runner."""
