@@ -8,7 +8,8 @@ fraction of steps that rebuilt the neighbour lists. Each case first runs to --st
 seconds untimed (the surge is then under way, so lists go stale at a realistic rate), then is
 timed for --seconds of wall clock; compilation is never counted.
 
-    python bench/solver.py [--device cpu|cuda:0] [--dx 0.03 0.02 0.015] [--seconds 20] [--start 0.05]
+    python bench/solver.py [--device cpu|cuda:0] [--dx 0.03 0.02 0.015 | --particles 1e5 1e6]
+                           [--seconds 20] [--start 0.05]
 """
 import argparse
 import time
@@ -19,11 +20,18 @@ from gpusph_ros.scenes.build import build
 from gpusph_ros.scenes.schema import load_scene
 from gpusph_ros.sph import Solver
 
+from series import model_of_about
+
 FORCE_PASSES_PER_STEP = 2
 
 
-def measure(dx: float, precision: str, device: str, seconds: float, start_time: float):
-    model = build(load_scene("dambreak1_thesis"), dx=dx, precision=precision, device=device)
+def measure(dx: float, precision: str, device: str, seconds: float, start_time: float, particles=None):
+    """One case at spacing ``dx``, or at the spacing that gives about ``particles``."""
+    if particles:
+        model = model_of_about("dambreak1_thesis", particles, precision=precision, device=device)
+        dx = model.config.dx
+    else:
+        model = build(load_scene("dambreak1_thesis"), dx=dx, precision=precision, device=device)
     solver = Solver(model.config, model.particles)
     solver.advance(start_time)
     wp.synchronize_device(solver.device)
@@ -53,6 +61,8 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--device", default="cpu")
     parser.add_argument("--dx", type=float, nargs="+", default=[0.03, 0.02, 0.015])
+    parser.add_argument("--particles", type=float, nargs="+", help="about how many particles each case has "
+                        "(instead of --dx)")
     parser.add_argument("--precision", nargs="+", default=["float32", "float64"])
     parser.add_argument("--seconds", type=float, default=20.0, help="wall-clock time measured per case")
     parser.add_argument("--start", type=float, default=0.05, help="simulated time run untimed first [s]")
@@ -64,10 +74,10 @@ def main():
           "cubic spline, artificial viscosity, dynamic boundaries, delta-SPH")
     print(header)
     print("-" * len(header))
-    for dx in args.dx:
+    for dx, particles in ([(None, n) for n in args.particles] if args.particles else [(dx, None) for dx in args.dx]):
         for precision in args.precision:
-            r = measure(dx, precision, args.device, args.seconds, args.start)
-            print(f"{r['device']:8s} {r['precision']:9s} {r['dx']:7.3f} {r['particles']:10d} {r['fluid']:8d} "
+            r = measure(dx, precision, args.device, args.seconds, args.start, particles)
+            print(f"{r['device']:8s} {r['precision']:9s} {r['dx']:7.4f} {r['particles']:10d} {r['fluid']:8d} "
                   f"{r['neighbours']:6.1f} {r['steps']:6d} {r['steps_per_s']:8.2f} {r['mipps']:7.3f} "
                   f"{r['interactions_per_s']:15.3e} {r['rebuilds']:8.2f}", flush=True)
 
