@@ -5,7 +5,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: run test bench clean
+.PHONY: run test lint unit bench gpu-check clean
 
 $(STAMP): requirements.txt setup.py package.xml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -21,12 +21,25 @@ run: $(STAMP)
 	$(BIN)/gpusph-run dambreak1_thesis --set dx=0.03 --set end_time=1.0 --out $(RUN_DIR)
 	$(BIN)/gpusph-analyze $(RUN_DIR)
 
+# every test, the lint among them (tests/test_lint.py); markers unit, physics, ros, study (pytest.ini)
 test: $(STAMP)
 	$(BIN)/python -m pytest -q tests
+
+lint: $(STAMP)
+	$(BIN)/ruff check .
+
+# the fast tests alone (under a minute)
+unit: $(STAMP)
+	$(BIN)/python -m pytest -q -m unit tests
 
 bench: $(STAMP)
 	$(BIN)/python bench/solver.py
 	$(BIN)/python bench/node.py
+
+# on a machine where Warp sees CUDA: tests, benchmarks and DamBreak 1 at 1 cm on cuda:0, one report
+# (runs/gpu-check/report.md); elsewhere it says no CUDA device was found and exits 0
+gpu-check: $(STAMP)
+	$(BIN)/python bench/gpu_check.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info

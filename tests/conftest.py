@@ -45,3 +45,15 @@ def hydrostatic_errors(snap: dict, dim: int, h: float, depth: float, rho0: float
         assert sel.sum() >= 5, f"too few particles in the depth bin {b:.1f}-{b + 0.2:.1f} H"
         errors.append(p[sel].mean() / (rho0 * g * d[sel].mean()) - 1.0)
     return np.array(errors)
+
+
+KINDS = ("unit", "physics", "ros", "study")
+
+
+def pytest_collection_modifyitems(config, items):
+    """Each test is of exactly one kind (pytest.ini), so the kinds together are the whole suite."""
+    wrong = [f"{item.nodeid}: {kinds or 'none'}" for item in items
+             if len(kinds := [m.name for m in item.iter_markers() if m.name in KINDS]) != 1]
+    if wrong:
+        raise pytest.UsageError("each test needs exactly one of the markers " + ", ".join(KINDS) + ":\n  "
+                                + "\n  ".join(wrong))

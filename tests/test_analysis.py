@@ -5,6 +5,8 @@ import pytest
 from gpusph_ros.analysis import metrics as M
 from gpusph_ros.analysis.reference import gpusph_value, thesis_scenario
 
+pytestmark = pytest.mark.unit
+
 
 def test_moving_average_keeps_lines_and_averages_a_window():
     t = np.arange(0.0, 1.0, 0.01)
@@ -57,8 +59,8 @@ def test_gpusph_lookup_by_scenario_and_dx(reference_data):
 def record_synthetic_bore(path):
     """A recording of the dambreak2_015 scene's topics carrying a known bore (0.8 m/s from 4.45 s),
     as a run at dx = 1 cm with the quadratic kernel and SPS (thesis scenario 1) would write it."""
-    from gpusph_ros.ros.messages import clock, measurement_messages
-    from gpusph_ros.ros.recording import BagRecorder
+    from gpusph_ros.output.messages import clock, measurement_messages
+    from gpusph_ros.output.recording import BagRecorder
     from gpusph_ros.scenes.schema import load_scene
 
     scene = load_scene("dambreak2_015")

@@ -12,6 +12,8 @@ from gpusph_ros.scenes.build import build
 from gpusph_ros.scenes.schema import parse_scene
 from gpusph_ros.sph import Solver
 
+pytestmark = pytest.mark.physics
+
 DX, DEPTH, G = 0.01, 0.24, 9.81
 TANK = {
     "dim": 2, "tank": [0.6, 0.3], "depth": DEPTH, "walls": "particles",

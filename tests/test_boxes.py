@@ -6,6 +6,8 @@ import pytest
 from gpusph_ros.scenes.boxes import box_tank, fill_box
 from gpusph_ros.sph import SolverConfig
 
+pytestmark = pytest.mark.unit
+
 
 @pytest.mark.parametrize("dx", [0.006, 0.0075, 0.01, 0.0125, 0.015, 0.02, 0.03])
 @pytest.mark.parametrize("depth", [0.10, 0.15, 0.4])

@@ -7,6 +7,8 @@ import pytest
 from gpusph_ros.scenes.build import build, floor_rectangles
 from gpusph_ros.scenes.schema import load_scene
 
+pytestmark = pytest.mark.unit
+
 RHO0 = 1000.0
 
 

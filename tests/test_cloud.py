@@ -8,6 +8,8 @@ from gpusph_ros.scenes.build import build
 from gpusph_ros.scenes.schema import load_scene
 from gpusph_ros.sph import Solver
 
+pytestmark = pytest.mark.unit
+
 
 @pytest.fixture(scope="module", params=["float32", "float64"])
 def solver(request):

@@ -11,6 +11,8 @@ from gpusph_ros.scenes.run import read_run_file
 from gpusph_ros.scenes.schema import load_scene
 from gpusph_ros.sph import Solver
 
+pytestmark = pytest.mark.physics
+
 SCENE = load_scene("collapse_2d")
 A = SCENE.fluid[0].hi[0]  # column width a
 # the defaults in both precisions, and the thesis's scenario 3 as GPUSPH ran it (cubic spline,

@@ -3,6 +3,8 @@ import pytest
 
 from gpusph_ros.sph import ConfigError, Plane, SolverConfig
 
+pytestmark = pytest.mark.unit
+
 
 @pytest.mark.parametrize("field, value, allowed", [
     ("kernel", "gauss", "quadratic, cubic_spline, wendland"),

@@ -6,6 +6,8 @@ from gpusph_ros.scenes.boxes import lattice
 from gpusph_ros.sph import KERNELS, Particles, Solver, SolverConfig, kernels
 from gpusph_ros.sph.eos import hydrostatic_density
 
+pytestmark = pytest.mark.unit
+
 
 def periodic_block(kernel: str, dim: int, precision: str = "float64"):
     dx = 0.005

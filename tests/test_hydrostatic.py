@@ -17,6 +17,8 @@ from gpusph_ros.sph import Solver, SolverConfig
 
 from conftest import hydrostatic_errors
 
+pytestmark = pytest.mark.physics
+
 DX = 0.01
 SETTLE_UNTIL, SETTLE_TAU = 0.4, 0.02
 START, END, SAMPLES = 0.6, 1.0, 10

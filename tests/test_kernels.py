@@ -4,6 +4,8 @@ import pytest
 
 from gpusph_ros.sph import KERNELS, kernels
 
+pytestmark = pytest.mark.unit
+
 H = 0.013
 
 

@@ -8,6 +8,8 @@ from gpusph_ros.measure.probes import PointProbes
 from gpusph_ros.scenes.boxes import box_tank, lattice
 from gpusph_ros.sph import BOUNDARY, Particles, Solver, SolverConfig, kernels
 
+pytestmark = pytest.mark.unit
+
 DX = 0.01
 
 

@@ -5,6 +5,8 @@ import pytest
 from gpusph_ros.sph import Particles, Solver, SolverConfig
 from gpusph_ros.sph.neighbours import NeighbourList
 
+pytestmark = pytest.mark.unit
+
 
 @pytest.mark.parametrize("precision", ["float32", "float64"])
 def test_lists_match_brute_force(precision):

@@ -9,6 +9,8 @@ from gpusph_ros.scenes.run import resolve
 from gpusph_ros.scenes.schema import load_scene
 from gpusph_ros.sph import Solver
 
+pytestmark = pytest.mark.unit
+
 
 @pytest.fixture(scope="module")
 def collapse():

@@ -16,10 +16,12 @@ from rosbags.highlevel import AnyReader
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from gpusph_ros.analysis.bag import read
-from gpusph_ros.ros import msgdefs
+from gpusph_ros.output import msgdefs
 from gpusph_ros.runner import Run
 from gpusph_ros.scenes.run import resolve
 from gpusph_ros.scenes.schema import load_scene
+
+pytestmark = pytest.mark.ros
 
 REPO = Path(__file__).resolve().parents[1]
 TYPES = ["sensor_msgs/msg/PointCloud2", "geometry_msgs/msg/WrenchStamped", "geometry_msgs/msg/Vector3Stamped",

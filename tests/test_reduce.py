@@ -14,6 +14,8 @@ from gpusph_ros.scenes.run import resolve
 from gpusph_ros.scenes.schema import load_scene, parse_scene
 from gpusph_ros.sph import ConfigError
 
+pytestmark = pytest.mark.physics
+
 FLUID = 0
 
 

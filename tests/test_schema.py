@@ -9,6 +9,8 @@ from gpusph_ros.scenes.run import resolve
 from gpusph_ros.scenes.schema import builtin_names, load_scene, parse_scene
 from gpusph_ros.sph import ConfigError
 
+pytestmark = pytest.mark.unit
+
 GOOD = {
     "name": "tank", "dim": 3, "tank": [1.0, 0.5, 0.4], "depth": 0.2,
     "walls": {"floor": "particles", "x_min": "planes"},

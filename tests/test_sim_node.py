@@ -21,11 +21,13 @@ from sensor_msgs.msg import PointCloud2
 from std_srvs.srv import SetBool, Trigger
 
 from gpusph_ros.analysis import bag as bag_reader
-from gpusph_ros.ros.messages import cloud_arrays
+from gpusph_ros.output.messages import cloud_arrays
 from gpusph_ros.scenes.build import build
 from gpusph_ros.scenes.schema import load_scene
 
 from ros_client import Client
+
+pytestmark = pytest.mark.ros
 
 REPO = Path(__file__).resolve().parents[1]
 BIN = Path(sys.executable).parent

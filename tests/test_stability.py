@@ -7,6 +7,8 @@ import pytest
 
 from gpusph_ros.study import stability as st
 
+pytestmark = pytest.mark.study
+
 
 @pytest.mark.parametrize("limit", [0.137, 0.55, 0.99])
 def test_search_brackets_the_largest_stable_value(limit):

@@ -6,6 +6,8 @@ import yaml
 from gpusph_ros.sph import ConfigError
 from gpusph_ros.study.schema import load_study, study_names
 
+pytestmark = pytest.mark.unit
+
 
 def test_the_thesis_studies_hold_the_thesis_cases():
     names = {"thesis_dambreak1", "thesis_dambreak2", "thesis_dambreak1_cpu", "thesis_dambreak2_cpu"}

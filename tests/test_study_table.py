@@ -6,6 +6,8 @@ import pytest
 
 from gpusph_ros.study import charts, table
 
+pytestmark = pytest.mark.unit
+
 
 def _row(scenario, dx, err, wall, gpusph_scenario, status="completed"):
     return {"case": f"dambreak1_thesis-{scenario}-dx={dx:g}", "scene": "dambreak1_thesis", "scenario": scenario,

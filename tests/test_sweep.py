@@ -14,6 +14,8 @@ from gpusph_ros.study import charts, table
 from gpusph_ros.study.schema import load_study
 from gpusph_ros.study.sweep import sweep
 
+pytestmark = pytest.mark.study
+
 
 def _study(tmp_path, end_time, c0s):
     path = tmp_path / "small.yaml"

@@ -11,6 +11,8 @@ import pytest
 from gpusph_ros.scenes.boxes import lattice
 from gpusph_ros.sph import BOUNDARY, FLUID, Particles, Solver, SolverConfig
 
+pytestmark = pytest.mark.unit
+
 L = 0.02  # channel width [m]
 DX = L / 20
 NU = 1.0e-3  # a viscous fluid, so the start-up decays in a fraction of a second
