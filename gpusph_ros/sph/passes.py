@@ -29,7 +29,9 @@ SPS = viscosity.VISCOSITY_ID["sps"]
 
 
 @functools.lru_cache(maxsize=None)
-def build(scalar):
+def _force_passes(scalar):
+    """The passes that evaluate the equations: the equation of state, the SPS strain, the pair
+    interactions (forces, density rates, XSPH) and the Shepard filter."""
     vec = wp.types.vector(3, scalar)
     mat33 = wp.types.matrix((3, 3), scalar)
     S = state.build(scalar)
@@ -47,8 +49,6 @@ def build(scalar):
     lennard_jones, monaghan_kajtar, plane_wall = B.lennard_jones, B.monaghan_kajtar, B.plane_wall
     N = neighbours.build(scalar)
     Grid, separation = N.Grid, N.separation
-    H = health.build(scalar)
-    healthy = H.healthy
 
     @wp.func
     def pair(p: Params, f: Fields, a: int, b: int, r_ab: vec):
@@ -185,6 +185,29 @@ def build(scalar):
         clumped[i] = close
 
     @wp.kernel(enable_backward=False, module="unique")
+    def shepard(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32), f: Fields,
+                rho_out: wp.array(dtype=scalar), chunk: int, stride: int):
+        """The Shepard filter (density.shepard, thesis Eq. 2.28) on the fluid; boundaries keep theirs."""
+        i = wp.tid() * stride + chunk
+        if f.ptype[i] != FLUID:
+            rho_out[i] = f.rho[i]
+            return
+        rho_out[i] = shepard_density(p.kernel, p.norm, p.inv_h, p.boundary == DYNAMIC, grid, nbr, count, i, f.pos,
+                                     f.rho, f.mass, f.ptype)
+
+    return SimpleNamespace(equation_of_state=equation_of_state, sps_strain=sps_strain, interact=interact,
+                           shepard=shepard)
+
+
+@functools.lru_cache(maxsize=None)
+def _time_passes(scalar):
+    """The passes that advance time: the step size, the integrator, commit, the cell-order
+    permutation and the clock."""
+    vec = wp.types.vector(3, scalar)
+    Params = state.build(scalar).Params
+    healthy = health.build(scalar).healthy
+
+    @wp.kernel(enable_backward=False, module="unique")
     def choose_dt(p: Params, t_target: wp.float64, maxima: wp.array(dtype=scalar), fail: wp.array(dtype=wp.int32),
                   clock: wp.array(dtype=wp.float64)):
         """dt = CFL min(sqrt(h/|a|max), h/(c0 + h max|mu|), 0.125 h^2/nu) (Monaghan 1992; GPUSPH).
@@ -284,18 +307,12 @@ def build(scalar):
             steps[1] = steps[0] + 1
             clock[3] = clock[0] + clock[1]
 
-    @wp.kernel(enable_backward=False, module="unique")
-    def shepard(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32), f: Fields,
-                rho_out: wp.array(dtype=scalar), chunk: int, stride: int):
-        """The Shepard filter (density.shepard, thesis Eq. 2.28) on the fluid; boundaries keep theirs."""
-        i = wp.tid() * stride + chunk
-        if f.ptype[i] != FLUID:
-            rho_out[i] = f.rho[i]
-            return
-        rho_out[i] = shepard_density(p.kernel, p.norm, p.inv_h, p.boundary == DYNAMIC, grid, nbr, count, i, f.pos,
-                                     f.rho, f.mass, f.ptype)
+    return SimpleNamespace(choose_dt=choose_dt, integrate=integrate, commit=commit, permute=permute, tick=tick)
 
-    return SimpleNamespace(Params=Params, Fields=Fields, equation_of_state=equation_of_state, sps_strain=sps_strain,
-                           interact=interact, choose_dt=choose_dt, integrate=integrate,
-                           check_particles=H.check_particles, census=H.census, census_check=H.census_check,
-                           commit=commit, tick=tick, shepard=shepard, permute=permute)
+
+@functools.lru_cache(maxsize=None)
+def build(scalar):
+    """Every pass of a step for one floating-point type, by name, with the structs they read."""
+    S, H = state.build(scalar), health.build(scalar)
+    return SimpleNamespace(Params=S.Params, Fields=S.Fields, check_particles=H.check_particles, census=H.census,
+                           census_check=H.census_check, **vars(_force_passes(scalar)), **vars(_time_passes(scalar)))
