@@ -44,14 +44,14 @@ def model_of_about(scene_name: str, target: float, **settings):
 
 
 def run_series(scene_name: str, **settings) -> dict:
-    """Run ``scene_name`` under run ``settings`` (``scenes.run.resolve`` keys); the record: counts,
+    """Run ``scene_name`` under run ``settings`` (``scenes.settings.resolve`` keys); the record: counts,
     steps, wall time (kernel loading excluded), MIPPS, how it ended, and ``series`` {name: list}
     with ``t``."""
     wp.config.log_level = wp.LOG_WARNING
     from gpusph_ros.measure.suite import Measurements
     from gpusph_ros.scenes.build import build_run
-    from gpusph_ros.scenes.run import resolve
     from gpusph_ros.scenes.schema import load_scene
+    from gpusph_ros.scenes.settings import resolve
     from gpusph_ros.sph import HealthError, NeighbourOverflow, Solver
 
     scene = load_scene(scene_name)

@@ -7,7 +7,7 @@
     gpusph-stability [--out DIR] [--workers N] [--device DEV] [--kernels ...] ... [--report]
 
 (also ``python -m gpusph_ros.cli run|analyze|sweep|plan|stability ...``). SCENE is a built-in scene name or a YAML
-file; run settings layer as scenes.run describes. Exit status: 0 done, 2 the run failed a
+file; run settings layer as scenes.settings describes. Exit status: 0 done, 2 the run failed a
 health check or was interrupted (its recording is closed and readable), 1 bad input.
 """
 import argparse
@@ -52,8 +52,8 @@ def run_main(argv=None):
 
     wp.config.log_level = wp.LOG_WARNING  # no per-module load lines
     from .runner import Run
-    from .scenes.run import resolve
     from .scenes.schema import load_scene
+    from .scenes.settings import resolve
     from .sph import ConfigError
 
     try:
@@ -170,8 +170,8 @@ def plan_main(argv=None):
 
     wp.config.log_level = wp.LOG_WARNING
     from .plan import plan, plan_reductions, table, text
-    from .scenes.run import resolve
     from .scenes.schema import load_scene
+    from .scenes.settings import resolve
     from .sph import ConfigError
 
     try:

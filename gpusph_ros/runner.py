@@ -29,7 +29,7 @@ PARTICLES_QOS = {"reliable": True, "depth": 1}
 
 
 class Run:
-    """One run of ``scene`` under ``run_config`` (``scenes.run.resolve``)."""
+    """One run of ``scene`` under ``run_config`` (``scenes.settings.resolve``)."""
 
     def __init__(self, scene, run_config, namespace: str = NAMESPACE, frame_id: str = "world"):
         self.scene, self.run_config = scene, run_config

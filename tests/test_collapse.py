@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from gpusph_ros.scenes.build import build
-from gpusph_ros.scenes.run import read_run_file
 from gpusph_ros.scenes.schema import load_scene
+from gpusph_ros.scenes.settings import read_run_file
 from gpusph_ros.sph import Solver
 
 pytestmark = pytest.mark.physics

@@ -8,7 +8,7 @@ from gpusph_ros.measure.probes import PointProbes
 from gpusph_ros.scenes.boxes import box_tank, lattice
 from gpusph_ros.sph import BOUNDARY, Particles, Solver, SolverConfig, kernels
 
-pytestmark = pytest.mark.unit
+pytestmark = pytest.mark.physics
 
 DX = 0.01
 

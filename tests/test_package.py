@@ -39,7 +39,8 @@ def test_setup_installs_the_ament_marker_manifest_and_config(tmp_path):
         assert (prefix / "lib/gpusph_ros" / script).is_file(), script
     # the installed package finds its scenes and run configurations under <prefix>/share
     site = next(prefix.glob("lib/python*/site-packages"))
-    code = ("from gpusph_ros.scenes.schema import builtin_names; from gpusph_ros.scenes.run import run_config_names; "
+    code = ("from gpusph_ros.scenes.schema import builtin_names; "
+            "from gpusph_ros.scenes.settings import run_config_names; "
             "import gpusph_ros.share as s; print(s.config_dir('scenes')); print(builtin_names(), run_config_names()); "
             "from gpusph_ros.analysis.reference import data_dir; print(data_dir())")
     found = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True,

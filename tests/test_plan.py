@@ -5,8 +5,8 @@ import pytest
 
 from gpusph_ros.plan import plan, text
 from gpusph_ros.scenes.build import build
-from gpusph_ros.scenes.run import resolve
 from gpusph_ros.scenes.schema import load_scene
+from gpusph_ros.scenes.settings import resolve
 from gpusph_ros.sph import Solver
 
 pytestmark = pytest.mark.unit

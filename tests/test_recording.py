@@ -18,8 +18,8 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from gpusph_ros.analysis.bag import read
 from gpusph_ros.output import msgdefs
 from gpusph_ros.runner import Run
-from gpusph_ros.scenes.run import resolve
 from gpusph_ros.scenes.schema import load_scene
+from gpusph_ros.scenes.settings import resolve
 
 pytestmark = pytest.mark.ros
 

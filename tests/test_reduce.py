@@ -10,8 +10,8 @@ import yaml
 from gpusph_ros.runner import Run
 from gpusph_ros.scenes import reduce
 from gpusph_ros.scenes.build import build_run
-from gpusph_ros.scenes.run import resolve
 from gpusph_ros.scenes.schema import load_scene, parse_scene
+from gpusph_ros.scenes.settings import resolve
 from gpusph_ros.sph import ConfigError
 
 pytestmark = pytest.mark.physics

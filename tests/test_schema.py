@@ -5,8 +5,8 @@ import copy
 import pytest
 import yaml
 
-from gpusph_ros.scenes.run import resolve
 from gpusph_ros.scenes.schema import builtin_names, load_scene, parse_scene
+from gpusph_ros.scenes.settings import resolve
 from gpusph_ros.sph import ConfigError
 
 pytestmark = pytest.mark.unit

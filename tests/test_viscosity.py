@@ -11,7 +11,7 @@ import pytest
 from gpusph_ros.scenes.boxes import lattice
 from gpusph_ros.sph import BOUNDARY, FLUID, Particles, Solver, SolverConfig
 
-pytestmark = pytest.mark.unit
+pytestmark = pytest.mark.physics
 
 L = 0.02  # channel width [m]
 DX = L / 20

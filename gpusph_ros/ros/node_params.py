@@ -13,8 +13,8 @@ from pathlib import Path
 
 from ..measure.cloud import FIELDS as PARTICLE_FIELDS
 from ..scenes.reduce import MODELS
-from ..scenes.run import resolve
 from ..scenes.schema import builtin_names, load_scene
+from ..scenes.settings import resolve
 from ..sph.config import BOUNDARIES, DENSITY_DIFFUSIONS, KERNELS, PRECISIONS, ConfigError
 
 # when a change takes effect

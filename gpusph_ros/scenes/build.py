@@ -67,7 +67,7 @@ def floor_rectangles(extent, footprints, dim: int) -> list:
 
 
 def build_run(scene: Scene, run_config) -> Model:
-    """The model of ``scene`` under ``run_config`` (``run.resolve``), reduced as it asks."""
+    """The model of ``scene`` under ``run_config`` (``settings.resolve``), reduced as it asks."""
     cfg = SolverConfig(**run_config.numerics)
     reduced = reduce.apply(scene, run_config.reduction, run_config.output.end_time, cfg.dx, cfg.hdx)
     return build(reduced, **run_config.numerics)

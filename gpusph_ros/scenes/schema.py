@@ -2,7 +2,7 @@
 
 A scene is geometry and gauges only: the tank, the water, the obstacles and where to measure.
 Numerics (dx, kernel, viscosity, boundary model, precision, CFL, output rate, end time, ...) come
-from the run configuration (``run.py``); a scene may suggest run settings under ``run:`` (its end
+from the run configuration (``settings.py``); a scene may suggest run settings under ``run:`` (its end
 time, say) that a run configuration or a ``--set`` overrides.
 
 Conventions: SI units; the tank is the open-top box [0, tank]; the vertical axis is the last one
@@ -74,7 +74,7 @@ class Scene:
     wet_bed: float = 0.0
     obstacles: list = field(default_factory=list)
     probes: list = field(default_factory=list)
-    run: dict = field(default_factory=dict)
+    run_settings: dict = field(default_factory=dict)  # the file's `run:` section (settings.py)
     text: str = ""  # the file as written, recorded with each run
     # where the tank's corner lies in the world: (0, 0, 0) but for a cropped scene (reduce.py),
     # whose boxes and probes are given from its own corner
@@ -279,4 +279,4 @@ def parse_scene(data, default_name: str = "scene") -> Scene:
     return Scene(name=name, dim=dim, tank=tank, gravity=gravity, depth=depth, fluid=fluid,
                  description=str(data.get("description", "")).strip(), source=str(data.get("source", "")).strip(),
                  headroom=headroom, periodic=periodic, walls=walls, wet_bed=wet_bed, obstacles=obstacles,
-                 probes=probes, run=dict(run))
+                 probes=probes, run_settings=dict(run))

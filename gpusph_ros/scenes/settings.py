@@ -100,7 +100,7 @@ def _coerce(key, value):
 def resolve(scene: Scene, files=(), sets=(), **overrides) -> RunConfig:
     """The run configuration of ``scene``: its run section, then ``files``, then ``sets``
     (``key=value`` strings), then keyword ``overrides``."""
-    layers = [scene.run] + [read_run_file(f) for f in files] + [dict(parse_set(s) for s in sets), overrides]
+    layers = [scene.run_settings] + [read_run_file(f) for f in files] + [dict(parse_set(s) for s in sets), overrides]
     merged = {}
     for layer in layers:
         for key, value in layer.items():

@@ -12,8 +12,8 @@ from pathlib import Path
 
 from ..analysis.report import analyse
 from ..runner import Run
-from ..scenes.run import resolve
 from ..scenes.schema import load_scene
+from ..scenes.settings import resolve
 
 RUN_FIELDS = ("kernel", "viscosity", "boundary", "density_diffusion", "precision", "device")
 

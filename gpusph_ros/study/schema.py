@@ -21,8 +21,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..analysis.report import LABELS
-from ..scenes.run import read_run_file, resolve
 from ..scenes.schema import _mapping, load_scene, read_yaml, shipped
+from ..scenes.settings import read_run_file, resolve
 from ..sph.config import ConfigError
 
 KEYS = ("name", "description", "scenes", "scenarios", "grid", "set", "metrics", "out", "workers")

@@ -41,7 +41,7 @@ class Combination:
     density: str
 
     def settings(self) -> dict:
-        """Run settings (``scenes.run.resolve`` keys) of this combination."""
+        """Run settings (``scenes.settings.resolve`` keys) of this combination."""
         out = {"kernel": self.kernel, "viscosity": self.viscosity,
                "density_diffusion": "delta" if self.density == "delta" else "none",
                "shepard_every": 40 if self.density == "shepard" else 0}
@@ -63,8 +63,8 @@ def trial(scene_name: str, settings: dict) -> str:
 
     wp.config.log_level = wp.LOG_WARNING
     from ..scenes.build import build_run
-    from ..scenes.run import resolve
     from ..scenes.schema import load_scene
+    from ..scenes.settings import resolve
     from ..sph import HealthError, NeighbourOverflow, Solver
 
     scene = load_scene(scene_name)
