@@ -3,7 +3,7 @@ process, and driven by a client node over ROS 2 (parameters, services, topics, r
 
 The scene is DamBreak 1 at 6 cm (4,385 particles) and the 2D collapse at 2.5 mm, so the node
 steps at tens of outputs a second on a CPU. The tests share one node (each starts from its
-initial parameters, reset and running: ``fresh``), but for the two that stop a node, which start
+initial parameters, reset and running: fixture ``client``), but for the two that stop a node, which start
 their own on DDS domains of their own; no test depends on another having run.
 """
 import os

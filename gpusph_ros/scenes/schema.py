@@ -186,6 +186,68 @@ def _unique(where, names):
         seen.add(name)
 
 
+def _walls(walls_in, dim) -> dict:
+    """The wall kind of each face: one kind for all, or a mapping face -> kind."""
+    faces = wall_faces(dim)
+    if isinstance(walls_in, str):
+        walls_in = {face: walls_in for face in faces}
+    walls_in = _mapping("walls", walls_in, faces)
+    walls = {}
+    for face in faces:
+        kind = walls_in.get(face, "particles")
+        if kind not in WALL_KINDS:
+            raise ConfigError(f"walls.{face}", kind, "one of " + ", ".join(WALL_KINDS))
+        walls[face] = kind
+    return walls
+
+
+def _obstacles(items, tank, dim) -> list:
+    """Solid boxes standing on the floor, each with its pressure-block offsets."""
+    up = dim - 1
+    obstacles = []
+    for k, item in enumerate(items):
+        where = f"obstacles[{k}]"
+        item, name, lo, hi = _box(where, item, tank, dim, extra_keys=("block_offsets",))
+        offsets = item.get("block_offsets", [0.0, 0.06])
+        if not isinstance(offsets, list):
+            raise ConfigError(f"{where}.block_offsets", offsets, "a list of distances >= 0 [m]")
+        offsets = tuple(_number(f"{where}.block_offsets[{j}]", o, lo=0.0) for j, o in enumerate(offsets))
+        if lo[up] > 0.0:
+            raise ConfigError(f"{where}.lo", list(lo[:dim]), "a box standing on the floor (lo on the vertical axis 0)")
+        obstacles.append(Obstacle(name, lo, hi, offsets))
+    _unique("obstacles", [o.name for o in obstacles])
+    return obstacles
+
+
+def _probes(probes_in, tank, dim) -> list:
+    """Probes by name: point, column or profile, each inside the tank."""
+    up = dim - 1
+    probes = []
+    if not isinstance(probes_in, dict):
+        raise ConfigError("probes", probes_in, "a mapping from probe name to {type, position, ...}")
+    for name, item in probes_in.items():
+        where = f"probes.{name}"
+        _name(where, name)
+        item = _mapping(where, item, ("type", "position", "radius_dx", "heights"), required=("type", "position"))
+        kind = item["type"]
+        if kind not in PROBE_TYPES:
+            raise ConfigError(f"{where}.type", kind, "one of " + ", ".join(PROBE_TYPES))
+        length = dim if kind == "point" else dim - 1
+        position = _pad3(_vector(f"{where}.position", item["position"], length))
+        _inside(f"{where}.position", position, tank, length)
+        radius = _number(f"{where}.radius_dx", item.get("radius_dx", 3.0), lo=0.0, lo_open=True)
+        heights = ()
+        if kind == "profile":
+            raw = item.get("heights")
+            if not isinstance(raw, list) or not raw:
+                raise ConfigError(f"{where}.heights", raw, "a list of heights above the floor [m]")
+            heights = tuple(_number(f"{where}.heights[{j}]", z, lo=0.0, hi=tank[up]) for j, z in enumerate(raw))
+        elif "heights" in item:
+            raise ConfigError(f"{where}.heights", item["heights"], "no heights: only profile probes take them")
+        probes.append(Probe(name, kind, position, radius, heights))
+    return probes
+
+
 def parse_scene(data, default_name: str = "scene") -> Scene:
     """Check a scene read from YAML (a dict) and return it as a ``Scene``."""
     data = _mapping("", data, SCENE_KEYS, required=("dim", "tank", "fluid"))
@@ -209,17 +271,7 @@ def parse_scene(data, default_name: str = "scene") -> Scene:
         raise ConfigError("periodic", periodic, f"a list of {dim} booleans, false for the vertical axis")
     periodic = tuple(periodic) + (False,) * (3 - dim)
 
-    faces = wall_faces(dim)
-    walls_in = data.get("walls", "particles")
-    if isinstance(walls_in, str):
-        walls_in = {face: walls_in for face in faces}
-    walls_in = _mapping("walls", walls_in, faces)
-    walls = {}
-    for face in faces:
-        kind = walls_in.get(face, "particles")
-        if kind not in WALL_KINDS:
-            raise ConfigError(f"walls.{face}", kind, "one of " + ", ".join(WALL_KINDS))
-        walls[face] = kind
+    walls = _walls(data.get("walls", "particles"), dim)
 
     fluid_in = data["fluid"]
     if not isinstance(fluid_in, list) or not fluid_in:
@@ -233,43 +285,8 @@ def parse_scene(data, default_name: str = "scene") -> Scene:
     depth = _number("depth", data.get("depth", surface), lo=0.0, lo_open=True)
     wet_bed = _number("wet_bed", data.get("wet_bed", 0.0), lo=0.0, hi=tank[up])
 
-    obstacles = []
-    for k, item in enumerate(data.get("obstacles") or []):
-        where = f"obstacles[{k}]"
-        item, name, lo, hi = _box(where, item, tank, dim, extra_keys=("block_offsets",))
-        offsets = item.get("block_offsets", [0.0, 0.06])
-        if not isinstance(offsets, list):
-            raise ConfigError(f"{where}.block_offsets", offsets, "a list of distances >= 0 [m]")
-        offsets = tuple(_number(f"{where}.block_offsets[{j}]", o, lo=0.0) for j, o in enumerate(offsets))
-        if lo[up] > 0.0:
-            raise ConfigError(f"{where}.lo", list(lo[:dim]), "a box standing on the floor (lo on the vertical axis 0)")
-        obstacles.append(Obstacle(name, lo, hi, offsets))
-    _unique("obstacles", [o.name for o in obstacles])
-
-    probes = []
-    probes_in = data.get("probes") or {}
-    if not isinstance(probes_in, dict):
-        raise ConfigError("probes", probes_in, "a mapping from probe name to {type, position, ...}")
-    for name, item in probes_in.items():
-        where = f"probes.{name}"
-        _name(where, name)
-        item = _mapping(where, item, ("type", "position", "radius_dx", "heights"), required=("type", "position"))
-        kind = item["type"]
-        if kind not in PROBE_TYPES:
-            raise ConfigError(f"{where}.type", kind, "one of " + ", ".join(PROBE_TYPES))
-        length = dim if kind == "point" else dim - 1
-        position = _pad3(_vector(f"{where}.position", item["position"], length))
-        _inside(f"{where}.position", position, tank, length)
-        radius = _number(f"{where}.radius_dx", item.get("radius_dx", 3.0), lo=0.0, lo_open=True)
-        heights = ()
-        if kind == "profile":
-            raw = item.get("heights")
-            if not isinstance(raw, list) or not raw:
-                raise ConfigError(f"{where}.heights", raw, "a list of heights above the floor [m]")
-            heights = tuple(_number(f"{where}.heights[{j}]", z, lo=0.0, hi=tank[up]) for j, z in enumerate(raw))
-        elif "heights" in item:
-            raise ConfigError(f"{where}.heights", item["heights"], "no heights: only profile probes take them")
-        probes.append(Probe(name, kind, position, radius, heights))
+    obstacles = _obstacles(data.get("obstacles") or [], tank, dim)
+    probes = _probes(data.get("probes") or {}, tank, dim)
 
     run = data.get("run") or {}
     if not isinstance(run, dict):

@@ -114,6 +114,7 @@ class SolverConfig:
 
     @property
     def sound_speed(self) -> float:
+        """c0 (thesis Eq. 2.14, there dp/drho at rho0): ``c0`` when set, else c0_coef sqrt(g H)."""
         if self.c0 > 0.0:
             return self.c0
         return self.c0_coef * math.sqrt(self.g_norm * self.depth)
