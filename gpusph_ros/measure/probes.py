@@ -21,7 +21,7 @@ from ..sph.state import FLUID
 def build(scalar):
     vec = wp.types.vector(3, scalar)
     kernel_w = kernels.build(scalar).w
-    N = neighbours.build(scalar)
+    N = neighbours.grid(scalar)
     Grid, separation, cell_coord, neighbour_cell = N.Grid, N.separation, N.cell_coord, N.neighbour_cell
     S = state.build(scalar)
     Params, Fields = S.Params, S.Fields

@@ -26,7 +26,7 @@ FLUID = state.FLUID
 def build(scalar):
     vec = wp.types.vector(3, scalar)
     kernel_w = kernels.build(scalar).w
-    N = neighbours.build(scalar)
+    N = neighbours.grid(scalar)
     Grid, separation = N.Grid, N.separation
 
     @wp.func

@@ -25,7 +25,9 @@ class NeighbourOverflow(RuntimeError):
 
 
 @functools.lru_cache(maxsize=None)
-def build(scalar):
+def grid(scalar):
+    """The cell grid (a struct) and the functions that find a point's cell, a cell's neighbours and
+    the separation of two points (minimum image on periodic axes): what every neighbour loop needs."""
     vec = wp.types.vector(3, scalar)
 
     @wp.struct
@@ -79,6 +81,17 @@ def build(scalar):
         if cx < 0 or cy < 0 or cz < 0:
             return -1
         return (cz * grid.dims[1] + cy) * grid.dims[0] + cx
+
+    return SimpleNamespace(Grid=Grid, separation=separation, cell_coord=cell_coord, neighbour_cell=neighbour_cell)
+
+
+@functools.lru_cache(maxsize=None)
+def build(scalar):
+    """The passes that sort particles into cells and build the neighbour lists, with the grid's
+    struct and functions."""
+    vec = wp.types.vector(3, scalar)
+    G = grid(scalar)
+    Grid, separation, cell_coord, neighbour_cell = G.Grid, G.separation, G.cell_coord, G.neighbour_cell
 
     @wp.kernel(enable_backward=False, module="unique")
     def cell_keys(grid: Grid, pos: wp.array(dtype=vec), keys: wp.array(dtype=wp.int32),
@@ -160,10 +173,9 @@ def build(scalar):
             n = grid.max_neighbours
         count[i] = n
 
-    return SimpleNamespace(Grid=Grid, separation=separation, cell_keys=cell_keys, cell_ranges=cell_ranges,
-                           gather_sorted=gather_sorted, neighbour_list=neighbour_list,
-                           check_displacement=check_displacement, mark_built=mark_built, cell_coord=cell_coord,
-                           neighbour_cell=neighbour_cell)
+    return SimpleNamespace(Grid=Grid, cell_keys=cell_keys, cell_ranges=cell_ranges, gather_sorted=gather_sorted,
+                           neighbour_list=neighbour_list, check_displacement=check_displacement,
+                           mark_built=mark_built)
 
 
 class NeighbourList:

@@ -47,7 +47,7 @@ def _force_passes(scalar):
     xsph_velocity = xsph.build(scalar).xsph_velocity
     B = boundaries.build(scalar)
     lennard_jones, monaghan_kajtar, plane_wall = B.lennard_jones, B.monaghan_kajtar, B.plane_wall
-    N = neighbours.build(scalar)
+    N = neighbours.grid(scalar)
     Grid, separation = N.Grid, N.separation
 
     @wp.func
