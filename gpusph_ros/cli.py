@@ -2,6 +2,7 @@
 
     gpusph-run SCENE [--run-config NAME|FILE ...] [--set key=value ...] --out DIR
     gpusph-analyze DIR [--charts DIR] [--reference DIR]     (a recording, or a study's results folder)
+    gpusph-analyze --repair BAG                             (a killed recording made readable again)
     gpusph-sweep STUDY [--scheduler ADDRESS] [--out DIR]
     gpusph-plan SCENE [--run-config NAME|FILE ...] [--set key=value ...] [--no-reductions]
     gpusph-stability [--out DIR] [--workers N] [--device DEV] [--kernels ...] ... [--report]
@@ -51,17 +52,22 @@ def run_main(argv=None):
     import warp as wp
 
     wp.config.log_level = wp.LOG_WARNING  # no per-module load lines
+    from .output.recording import folder_problem
     from .runner import Run
     from .scenes.schema import load_scene
     from .scenes.settings import resolve
     from .sph import ConfigError
 
+    problem = folder_problem(args.out, empty=True)
+    if problem:
+        print(f"gpusph-run: --out: {args.out!r} cannot be written: {problem}", file=sys.stderr)
+        return 1
     try:
         scene = load_scene(args.scene)
         config = resolve(scene, files=args.run_config, sets=args.set)
         run = Run(scene, config)
         recorder = run.open_recording(args.out)
-    except (ConfigError, FileExistsError, ValueError) as err:
+    except (ConfigError, FileExistsError, ValueError, OSError) as err:
         print(f"gpusph-run: {err}", file=sys.stderr)
         return 1
     print(f"{run.summary()} -> {args.out}", flush=True)
@@ -83,9 +89,14 @@ def analyze_main(argv=None):
     parser.add_argument("--reference", help="a reference folder laid out as the package's data/ "
                                             "(default: the package's own)")
     parser.add_argument("--no-charts", action="store_true")
+    parser.add_argument("--repair", action="store_true",
+                        help="rebuild a killed recording's index (summary, footer, metadata.yaml) from its complete "
+                             "chunks, so rosbags and mcap open it; then stop")
     args = parser.parse_args(argv)
     from pathlib import Path
 
+    if args.repair:
+        return _repair(args.recording)
     from .analysis import report as R
 
     if (Path(args.recording) / "results.csv").is_file():
@@ -102,6 +113,22 @@ def analyze_main(argv=None):
     print(f"\nmetrics: {path}" + ("".join(f"\nchart: {w}" for w in written)))
     if not rep["complete"]:
         print("note: the recording ends mid-file (a killed run); metrics cover what it holds")
+    return 0
+
+
+def _repair(bag) -> int:
+    from .output.recording import repair
+
+    try:
+        found = repair(bag)
+    except (OSError, ValueError) as err:
+        print(f"gpusph-analyze: {err}", file=sys.stderr)
+        return 1
+    if not found["repaired"]:
+        print(f"{found['file']} is whole: nothing to repair")
+        return 0
+    print(f"repaired {found['file']}: {found['messages']} messages on {len(found['topics'])} topics recovered "
+          f"from its complete chunks (the cut file is kept as {found['cut_file']})")
     return 0
 
 

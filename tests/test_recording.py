@@ -10,6 +10,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
+from mcap.reader import make_reader
 from mcap.stream_reader import StreamReader
 from mcap_ros2.reader import read_ros2_messages
 from rosbags.highlevel import AnyReader
@@ -129,6 +131,18 @@ def test_killed_run_leaves_its_complete_chunks_readable(tmp_path):
     assert not rec.complete and rec.result == {}
     assert sum(len(s["t"]) for s in rec.series.values()) + len(rec.clouds) + len(rec.clock) == count
     assert (out / "metadata.yaml").is_file()
+    # the documented recovery step; then rosbags and mcap's indexed reader open it whole
+    fixed = subprocess.run([sys.executable, "-m", "gpusph_ros.cli", "analyze", "--repair", str(out)],
+                           capture_output=True, text=True, timeout=120)
+    assert fixed.returncode == 0 and f"{count} messages" in fixed.stdout, fixed.stdout + fixed.stderr
+    with AnyReader([out]) as reader:
+        assert reader.message_count == count
+        assert sum(1 for _ in reader.messages()) == count
+    with open(next(out.glob("*.mcap")), "rb") as f:
+        assert sum(1 for _ in make_reader(f).iter_messages()) == count
+    info = yaml.safe_load((out / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    assert info["message_count"] == count
+    assert read(out).result["status"] == f"killed: repaired, {count} messages recovered"
 
 
 def test_sigterm_finishes_the_file(tmp_path):

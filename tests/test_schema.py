@@ -114,7 +114,7 @@ def test_run_settings_layer_scene_then_files_then_sets(tmp_path):
     ("colour=red", "colour", "the settings are"),
     ("end_time=-1", "end_time", "a time > 0"),
     ("particle_rate=500", "particle_rate", "to output_rate (100 Hz)"),
-    ("cfl=2", "cfl", "(0, 1]"),
+    ("cfl=2", "cfl", "[0.01, 1]"),
 ])
 def test_bad_run_setting_is_named(setting, field, allowed):
     with pytest.raises(ConfigError) as err:

@@ -9,20 +9,30 @@ simulated stamp. A metadata record ``gpusph_ros`` holds the scene, the resolved 
 configuration, versions and device, written first; ``gpusph_ros.result`` (wall time, steps,
 status) is written when the recording closes.
 
-The file is chunked and flushed after each chunk, so a killed run leaves every complete chunk
-readable by a streaming MCAP reader (``analysis.bag`` reads such files); ``metadata.yaml`` is
-written when the bag opens and rewritten with the final counts when it closes.
+The file is chunked; a chunk is closed and handed to the OS when it reaches CHUNK_SIZE, when
+FLUSH_EVERY seconds of wall clock have passed since the last one (``write``, and ``flush``, which
+the node calls once a second even while paused) and when the recording stops; ``metadata.yaml``
+is rewritten with the counts each time. A killed run (SIGKILL, an OOM kill, power loss) so loses
+at most the last FLUSH_EVERY seconds: its file lacks only the MCAP summary and footer, which
+``repair`` (``gpusph-analyze --repair BAG``, what ``ros2 bag reindex`` is to rosbag2) rebuilds from
+the complete chunks, so that rosbags and the ``mcap`` tools open it.
 """
+import os
+import time
 from importlib.metadata import version
 from pathlib import Path
 
 import yaml
+from mcap.exceptions import McapError
+from mcap.records import Channel, Header, Message, Metadata, Schema
+from mcap.stream_reader import StreamReader
 from mcap.writer import CompressionType, Writer
 from rclpy.serialization import serialize_message
 
 from . import msgdefs
 
 CHUNK_SIZE = 1 << 20
+FLUSH_EVERY = 1.0  # [s] of wall clock: the most a killed recording loses
 _INFINITE = {"sec": 9223372036, "nsec": 854775807}  # rmw's "infinite" duration
 
 
@@ -33,6 +43,25 @@ def qos_yaml(reliable: bool = True, depth: int = 10, transient_local: bool = Fal
                "lifespan": dict(_INFINITE), "liveliness": "automatic",
                "liveliness_lease_duration": dict(_INFINITE), "avoid_ros_namespace_conventions": False}
     return yaml.safe_dump([profile], sort_keys=False)
+
+
+def folder_problem(path, empty: bool = False):
+    """Why a recording cannot be written under ``path`` (a folder, created if missing; with
+    ``empty`` it must be empty or new), or None. Checked before a run is built, so a bad path
+    costs nothing."""
+    if not str(path).strip():
+        return "an empty path is no folder; name one"
+    target = Path(path).expanduser()
+    if target.exists() and not target.is_dir():
+        return f"{target} is a file, not a folder"
+    if empty and target.is_dir() and any(target.iterdir()):
+        return f"{target} exists and is not empty; choose a new folder"
+    existing = next(q for q in [target, *target.parents] if q.exists())
+    if not existing.is_dir():
+        return f"{target} lies under {existing}, which is a file"
+    if not os.access(existing, os.W_OK | os.X_OK):
+        return f"{existing} is not writable"
+    return None
 
 
 class _FlushingFile:
@@ -74,6 +103,7 @@ class BagRecorder:
         self._schemas, self._channels, self._topics = {}, {}, {}
         self.count, self.first, self.last = 0, None, None
         self.closed = False
+        self._flushed = time.monotonic()
         self._write_metadata_yaml()
 
     def add_topic(self, topic: str, type_name: str, qos: str):
@@ -100,6 +130,17 @@ class BagRecorder:
         self.count += 1
         self.first = ns if self.first is None else min(self.first, ns)
         self.last = ns if self.last is None else max(self.last, ns)
+        self.flush(due_only=True)
+
+    def flush(self, due_only: bool = False):
+        """Close the open chunk and rewrite metadata.yaml (with ``due_only``: only once FLUSH_EVERY
+        seconds have passed since the last flush)."""
+        now = time.monotonic()
+        if self.closed or (due_only and now - self._flushed < FLUSH_EVERY):
+            return
+        self._flushed = now
+        self._writer.flush()
+        self._write_metadata_yaml()
 
     def close(self, result: dict = None):
         """Finish the file (summary, footer) and write the final metadata.yaml."""
@@ -113,29 +154,95 @@ class BagRecorder:
         self._write_metadata_yaml()
 
     def _write_metadata_yaml(self):
-        start = self.first or 0
-        duration = (self.last - self.first) if self.count else 0
-        info = {
-            "version": 9,
-            "storage_identifier": "mcap",
-            "duration": {"nanoseconds": duration},
-            "starting_time": {"nanoseconds_since_epoch": start},
-            "message_count": self.count,
-            "topics_with_message_count": [
-                {"topic_metadata": {"name": topic, "type": e["type"], "serialization_format": "cdr",
-                                    # version 9 keeps the profiles as YAML here, as a string in the MCAP channel
-                                    "offered_qos_profiles": yaml.safe_load(e["qos"]),
-                                    "type_description_hash": msgdefs.type_hash(e["type"])},
-                 "message_count": e["count"]}
-                for topic, e in self._topics.items()],
-            "compression_format": "",
-            "compression_mode": "",
-            "relative_file_paths": [self.file_name],
-            "files": [{"path": self.file_name, "starting_time": {"nanoseconds_since_epoch": start},
-                       "duration": {"nanoseconds": duration}, "message_count": self.count}],
-            "custom_data": {},
-            "ros_distro": "jazzy",
-        }
-        tmp = self.path / "metadata.yaml.tmp"
-        tmp.write_text(yaml.safe_dump({"rosbag2_bagfile_information": info}, sort_keys=False))
-        tmp.replace(self.path / "metadata.yaml")
+        write_metadata_yaml(self.path, self.file_name, self._topics, self.count, self.first, self.last)
+
+
+def write_metadata_yaml(path: Path, file_name: str, topics: dict, count: int, first, last):
+    """rosbag2's metadata.yaml for one MCAP file in the bag ``path``; ``topics``: name -> {type,
+    qos (YAML text), count}; ``first``/``last``: the earliest and latest log times [ns]."""
+    start = first or 0
+    duration = (last - first) if count else 0
+    info = {
+        "version": 9,
+        "storage_identifier": "mcap",
+        "duration": {"nanoseconds": duration},
+        "starting_time": {"nanoseconds_since_epoch": start},
+        "message_count": count,
+        "topics_with_message_count": [
+            {"topic_metadata": {"name": topic, "type": e["type"], "serialization_format": "cdr",
+                                # version 9 keeps the profiles as YAML here, as a string in the MCAP channel
+                                "offered_qos_profiles": yaml.safe_load(e["qos"]),
+                                "type_description_hash": msgdefs.type_hash(e["type"])},
+             "message_count": e["count"]}
+            for topic, e in topics.items()],
+        "compression_format": "",
+        "compression_mode": "",
+        "relative_file_paths": [file_name],
+        "files": [{"path": file_name, "starting_time": {"nanoseconds_since_epoch": start},
+                   "duration": {"nanoseconds": duration}, "message_count": count}],
+        "custom_data": {},
+        "ros_distro": "jazzy",
+    }
+    tmp = path / "metadata.yaml.tmp"
+    tmp.write_text(yaml.safe_dump({"rosbag2_bagfile_information": info}, sort_keys=False))
+    tmp.replace(path / "metadata.yaml")
+
+
+def repair(path) -> dict:
+    """Rebuild a killed recording's MCAP summary and footer from its complete chunks, in place
+    (the cut file is kept beside it as ``<file>.cut``), and its metadata.yaml. Returns what was
+    found: repaired (False for a whole file, left as it is), messages and topics recovered."""
+    path = Path(path)
+    files = sorted(path.glob("*.mcap")) if path.is_dir() else []
+    if not files:
+        raise FileNotFoundError(f"{path}: no .mcap file here; expected a bag directory")
+    source = files[0]
+    cut = source.with_name(source.name + ".cut")
+    topics, count, first, last, whole = {}, 0, None, None, True
+    with open(source, "rb") as f:
+        reader = StreamReader(f, skip_magic=False)
+        try:
+            for _ in reader.records:
+                pass
+        except (McapError, EOFError, ValueError, KeyError, IndexError):
+            whole = False
+    if whole:
+        return {"repaired": False, "file": str(source)}
+    source.replace(cut)
+    writer_file = _FlushingFile(source)
+    writer = Writer(writer_file, chunk_size=CHUNK_SIZE, compression=CompressionType.NONE)
+    schemas, channels, result = {}, {}, False
+    with open(cut, "rb") as f:
+        try:
+            for record in StreamReader(f).records:
+                if isinstance(record, Header):
+                    writer.start(record.profile, record.library)
+                elif isinstance(record, Schema) and record.id not in schemas:
+                    schemas[record.id] = (writer.register_schema(record.name, record.encoding, record.data),
+                                          record.name)
+                elif isinstance(record, Channel) and record.id not in channels:
+                    sid, type_name = schemas[record.schema_id]
+                    channels[record.id] = (writer.register_channel(record.topic, record.message_encoding, sid,
+                                                                   record.metadata), record.topic)
+                    topics[record.topic] = {"type": type_name, "count": 0,
+                                            "qos": record.metadata.get("offered_qos_profiles", qos_yaml())}
+                elif isinstance(record, Metadata):
+                    result |= record.name == "gpusph_ros.result"
+                    writer.add_metadata(record.name, record.metadata)
+                elif isinstance(record, Message):
+                    cid, topic = channels[record.channel_id]
+                    writer.add_message(cid, log_time=record.log_time, publish_time=record.publish_time,
+                                       data=record.data, sequence=record.sequence)
+                    topics[topic]["count"] += 1
+                    count += 1
+                    first = record.log_time if first is None else min(first, record.log_time)
+                    last = record.log_time if last is None else max(last, record.log_time)
+        except (McapError, EOFError, ValueError, KeyError, IndexError):
+            pass  # the cut: everything after the last complete chunk is lost
+    if not result:
+        writer.add_metadata("gpusph_ros.result", {"status": f"killed: repaired, {count} messages recovered"})
+    writer.finish()
+    writer_file.close()
+    write_metadata_yaml(path, source.name, topics, count, first, last)
+    return {"repaired": True, "file": str(source), "cut_file": str(cut), "messages": count,
+            "topics": {name: e["count"] for name, e in topics.items()}}

@@ -7,11 +7,10 @@ each entry of ``PARAMS`` and asks ``check`` before accepting a change, so a para
 """
 import dataclasses
 import math
-import os
 from dataclasses import dataclass
-from pathlib import Path
 
 from ..measure.cloud import FIELDS as PARTICLE_FIELDS
+from ..output.recording import folder_problem
 from ..scenes.reduce import MODELS
 from ..scenes.schema import builtin_names, load_scene
 from ..scenes.settings import resolve
@@ -114,11 +113,8 @@ def _check_one(p: Param, value):
         return f"device: {value!r} is not available here; the devices are {', '.join(_device_names())}"
     elif p.name == "frame_id" and not value.strip():
         return "frame_id: an empty frame is not allowed; e.g. world"
-    elif p.name == "record_dir" and value:
-        target = Path(value).expanduser()
-        existing = next(q for q in [target, *target.parents] if q.exists())
-        if not existing.is_dir() or not os.access(existing, os.W_OK):
-            return f"record_dir: {value!r} cannot be written ({existing} is not a writable folder)"
+    elif p.name == "record_dir" and value and folder_problem(value):
+        return f"record_dir: {value!r} cannot be written: {folder_problem(value)}"
     return None
 
 

@@ -4,7 +4,8 @@ between two steps for a pause, a step request, a reset, a live parameter change 
 
 ROS callbacks run in other threads and only set flags and wait briefly: the solver asks
 ``_interrupted`` before every step, so nothing waits longer than one step. All Warp work runs
-in this thread, except a reset's build, which runs while this thread is held idle.
+in this thread, except a reset's build, which runs while this thread is held idle. Whatever a
+step raises ends the run as a failure the node reports; the thread never dies of it.
 """
 import datetime
 import threading
@@ -36,6 +37,8 @@ class Session:
         self._published = -1  # index of the last output handed to the publishers
         self._busy = self._hold = self._closing = False
         self._pending = {}
+        self._stepper = False  # a ~/step is waiting for its output
+        self._generation = 0  # bumped when what a waiting ~/step aims at changes (outputs, run, close)
         self._pace = None  # (wall, simulated time) the real-time factor counts from
         self._window = None
         self._thread = threading.Thread(target=self._loop, name="solver", daemon=True)
@@ -45,6 +48,8 @@ class Session:
     @property
     def state(self) -> str:
         run = self.run
+        if self._closing:
+            return "shut down"
         if run is None:
             return "unconfigured"
         if self.failure:
@@ -97,7 +102,11 @@ class Session:
                     if self._closing:
                         return
                     if not self._hold:
-                        self._apply_pending()
+                        try:
+                            self._apply_pending()
+                        except Exception as err:  # a refused change ends the run, not the thread
+                            self.failure = f"a live change failed: {type(err).__name__}: {err}"
+                            self._report("error", self.failure)
                     if self._can_advance():
                         break
                     self._cond.wait()
@@ -123,13 +132,18 @@ class Session:
         output = {k: v for k, v in changes.items() if LIVE_SETTINGS[k] == "output"}
         if output:
             run.set_output(**output)
+            # a ~/step waiting for an output of the old grid answers now; a paused solver stops
+            self._step_to, self._generation = -1, self._generation + 1
+            self._cond.notify_all()
         if "particle_fields" in changes or "frame_id" in changes:
             run.set_cloud(changes.get("particle_fields"), changes.get("frame_id"))
 
     def _advance(self, run):
         try:
             msgs = run.step_output(self._interrupted)
-        except (HealthError, NeighbourOverflow, RuntimeError) as err:  # RuntimeError: time stuck, device error
+        except Exception as err:  # HealthError, NeighbourOverflow, a stuck clock, a device error
+            if not isinstance(err, (HealthError, NeighbourOverflow)):
+                err = f"{type(err).__name__}: {err}"
             with self._cond:
                 self.failure, self.paused, self._step_to = str(err), True, -1
             self.stop_recording(f"failed: {err}")
@@ -139,7 +153,12 @@ class Session:
         if msgs is None:
             return
         t = run.solver.time
-        self._emit(msgs, t)
+        try:
+            self._emit(msgs, t)
+        except Exception as err:  # a full disk, a publisher torn down: the run goes on, the bag is finished
+            self.stop_recording(f"failed: the recording could not be written: {type(err).__name__}: {err}")
+            self._report("error", f"the output at t = {t:.4f} s was not sent or recorded: {type(err).__name__}: "
+                                  f"{err}; the recording (if any) is finished")
         with self._cond:
             self._published = run.next_output - 1
             self._cond.notify_all()
@@ -204,9 +223,15 @@ class Session:
             return True, f"running from t = {t:.4f} s"
 
     def step(self, timeout: float) -> tuple:
-        """Advance one output interval while paused; waits up to ``timeout`` s for it."""
+        """Advance one output interval while paused; waits up to ``timeout`` s for it while the
+        solver works towards it, and answers at once when the target goes away (the output rate
+        changed, a reset, a failure, shut-down). One ~/step waits at a time."""
         with self._cond:
             run = self.run
+            if self._closing:
+                return False, "the node is shut down"
+            if self._stepper:
+                return False, "a step is already under way; wait for its answer (or watch /clock)"
             if run is None:
                 return False, "no scene is loaded: configure the node (or call ~/reset)"
             if self.failure:
@@ -218,13 +243,25 @@ class Session:
             # the output after those already asked for; run.next_output has already moved past
             # an output the solver thread is still publishing
             k = self._step_to = max(run.next_output, self._step_to + 1)
+            generation, self._stepper = self._generation, True
             self._cond.notify_all()
             deadline = time.monotonic() + timeout
-            while self._published < k and not self.failure and run is self.run and time.monotonic() < deadline:
-                self._cond.wait(max(0.0, deadline - time.monotonic()))
+            try:
+                while (self._published < k and not self.failure and run is self.run and not self._closing
+                       and generation == self._generation and time.monotonic() < deadline):
+                    self._cond.wait(max(0.0, deadline - time.monotonic()))
+            finally:
+                self._stepper = False
             target = k / run.output.output_rate
             if self.failure:
                 return False, f"the step failed: {self.failure}"
+            if self._closing:
+                return False, "the node shut down while stepping"
+            if run is not self.run:
+                return False, "a reset replaced the run while stepping; step again"
+            if generation != self._generation:
+                return False, (f"the output settings changed while stepping; the solver stopped at "
+                               f"t = {run.solver.time:.4f} s; step again")
             if self._published < k:
                 return True, f"stepping to t = {target:.4f} s (still running after {timeout:g} s; watch /clock)"
             return True, f"stepped to t = {run.solver.time:.4f} s ({run.solver.steps} steps in all)"
@@ -247,6 +284,7 @@ class Session:
         self.stop_recording("reset")
         with self._cond:
             self.run, self.failure, self._step_to, self._published, self._pending = run, "", -1, -1, {}
+            self._generation += 1
             self._pace = self._window = None
             self._hold = False
             self._cond.notify_all()
@@ -265,6 +303,7 @@ class Session:
         """Stop the thread (between two steps) and finish the recording."""
         with self._cond:
             self._closing = True
+            self._generation += 1
             self._cond.notify_all()
         self._thread.join()
         self.stop_recording(status)
@@ -286,5 +325,18 @@ class Session:
             recorder, self.recorder = self.recorder, None
             if recorder is None:
                 return None
-            recorder.close(self.run.result(status) if self.run is not None else {"status": status})
+            try:
+                recorder.close(self.run.result(status) if self.run is not None else {"status": status})
+            except OSError as err:  # what could be written stays readable (gpusph-analyze --repair)
+                self._report("error", f"the recording {recorder.path} could not be finished: {err}")
             return recorder.path
+
+    def flush_recording(self):
+        """Close the recording's open chunk if it is due (a paused node writes nothing, and a
+        kill must not take what it wrote before)."""
+        with self._record_lock:
+            if self.recorder is not None:
+                try:
+                    self.recorder.flush(due_only=True)
+                except OSError as err:
+                    self._report("error", f"the recording {self.recorder.path} could not be flushed: {err}")

@@ -13,13 +13,20 @@ wrench`` (WrenchStamped, force on the body's particles and torque about the body
 ``~/probes/<name>`` (Vector3Stamped velocity, FluidPressure, PointStamped surface level), ``/clock``
 (before the outputs it stamps) and ``/diagnostics`` (1 Hz). Every stamp is simulated time.
 Services (std_srvs): ``~/reset``, ``~/set_paused``, ``~/step``, ``~/record``.
+
+No client can stop the node: every callback (services, parameter checks, lifecycle transitions,
+timers) answers whatever the layers below raise with a reason, logs it once, and turns an
+unexpected error into an ERROR diagnostic; services run side by side and a ~/step waits only for
+the solver; after shut-down every service refuses, naming the state.
 """
+import functools
 import sys
+import threading
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
-from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -32,6 +39,7 @@ from .. import __version__
 from ..output import messages
 from ..runner import CLOCK_QOS, PARTICLES_QOS, Run
 from ..sph import ConfigError
+from ..sph.config import shown
 from . import node_params
 from .node_params import PARAMS
 from .session import Session
@@ -42,6 +50,45 @@ STEP_WAIT = 30.0  # [s] the longest ~/step waits for its output before it answer
 def _qos(reliable: bool, depth: int) -> QoSProfile:
     reliability = ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT
     return QoSProfile(depth=depth, reliability=reliability)
+
+
+def _service(method):
+    """A service callback that always answers: refused after shut-down, and whatever it raises
+    becomes the reply's reason (and an ERROR diagnostic)."""
+    @functools.wraps(method)
+    def call(self, request, response):
+        if self.session.state == "shut down":
+            response.success, response.message = False, "the node is shut down (lifecycle state finalized)"
+            return response
+        try:
+            return method(self, request, response)
+        except Exception as err:  # the node outlives any one request
+            response.success, response.message = False, self._internal(method.__name__.strip("_"), err)
+            return response
+    return call
+
+
+def _transition(method):
+    """A lifecycle callback whose failure is FAILURE with the reason logged, never an exit."""
+    @functools.wraps(method)
+    def call(self, state):
+        try:
+            return method(self, state)
+        except Exception as err:
+            self._internal(method.__name__, err)
+            return TransitionCallbackReturn.FAILURE
+    return call
+
+
+def _quiet(method):
+    """A callback with no one to answer (a timer, the post-set hook): errors are logged once."""
+    @functools.wraps(method)
+    def call(self, *args):
+        try:
+            return method(self, *args)
+        except Exception as err:
+            self._internal(method.__name__.strip("_"), err)
+    return call
 
 
 def _descriptor(p) -> ParameterDescriptor:
@@ -69,15 +116,20 @@ class SimNode(LifecycleNode):
         self._topic_pubs = dict(self._fixed_pubs)
         self._diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         self.awaiting_reset = set()  # parameters changed since the last build that need one
+        self.internal_error = ""  # the last unexpected error a callback caught, until the next build
+        self._logged = set()
+        self._reset_lock = threading.Lock()
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
         self.session = Session(self._publish, self._report)
-        services = MutuallyExclusiveCallbackGroup()  # long ones (reset, step) never block parameter calls
+        # services run side by side (a waiting ~/step blocks no ~/set_paused) and apart from the
+        # parameter services; the session serialises what must be serialised
+        services = ReentrantCallbackGroup()
         self.create_service(Trigger, "~/reset", self._reset, callback_group=services)
         self.create_service(SetBool, "~/set_paused", self._set_paused, callback_group=services)
         self.create_service(Trigger, "~/step", self._step, callback_group=services)
         self.create_service(SetBool, "~/record", self._record, callback_group=services)
-        self.create_timer(1.0, self._publish_diagnostics)
+        self.create_timer(1.0, self._tick)
         self.get_logger().info(f"gpusph_ros {__version__}")
         if self.value("autostart"):
             self.trigger_configure()
@@ -87,6 +139,15 @@ class SimNode(LifecycleNode):
     def value(self, name):
         return self.get_parameter(name).value
 
+    def _internal(self, what: str, err: BaseException) -> str:
+        """Log an unexpected error once (by its text) and keep it for /diagnostics; the reason."""
+        reason = f"{what} failed: {type(err).__name__}: {shown(str(err))}"
+        self.internal_error = reason
+        if reason not in self._logged:
+            self._logged.add(reason)
+            self.get_logger().error(reason)
+        return reason
+
     def values(self) -> dict:
         return {p.name: self.value(p.name) for p in PARAMS}
 
@@ -95,7 +156,10 @@ class SimNode(LifecycleNode):
         changes = {p.name: p.value for p in parameters if p.name in node_params.BY_NAME}
         if not changes:
             return SetParametersResult(successful=True)
-        reason = node_params.check({**self.values(), **changes}, changed=changes)
+        try:
+            reason = node_params.check({**self.values(), **changes}, changed=changes)
+        except Exception as err:  # a scene file no check foresaw: refused, never an exit
+            reason = self._internal(f"checking {', '.join(changes)}", err)
         if reason:
             self.get_logger().warning(f"rejected {', '.join(changes)}: {reason}")
             return SetParametersResult(successful=False, reason=reason)
@@ -110,6 +174,7 @@ class SimNode(LifecycleNode):
             result.reason = "; ".join(f"{name} applies {node_params.applies_text(name)}" for name in names)
         return result
 
+    @_quiet
     def _apply_parameters(self, parameters):
         changes = {p.name: p.value for p in parameters if p.name in node_params.BY_NAME}
         live = {k: v for k, v in changes.items() if node_params.BY_NAME[k].applies == node_params.LIVE}
@@ -146,6 +211,7 @@ class SimNode(LifecycleNode):
         run = self.session.replace(self._build)
         self.session.real_time_factor = self.value("real_time_factor")
         self.awaiting_reset.clear()
+        self.internal_error = ""
         text = run.summary()
         self.get_logger().info(text)
         return text
@@ -154,9 +220,13 @@ class SimNode(LifecycleNode):
         directory = self.value("record_dir")
         if not directory or self.session.run is None:
             return ""
-        return f"; recording to {self.session.start_recording(directory)}"
+        try:
+            return f"; recording to {self.session.start_recording(directory)}"
+        except OSError as err:  # checked when set, but a folder can go away or fill up
+            return f"; not recording: cannot write under {directory} ({err.strerror or err})"
 
     # -- lifecycle -----------------------------------------------------------------------------
+    @_transition
     def on_configure(self, state) -> TransitionCallbackReturn:
         reason = node_params.check(self.values())
         if reason:
@@ -164,11 +234,12 @@ class SimNode(LifecycleNode):
             return TransitionCallbackReturn.FAILURE
         try:
             self._load()
-        except (ConfigError, ValueError, RuntimeError) as err:
+        except (ConfigError, ValueError, RuntimeError, OSError, MemoryError) as err:
             self.get_logger().error(f"cannot configure: {err}")
             return TransitionCallbackReturn.FAILURE
         return super().on_configure(state)
 
+    @_transition
     def on_activate(self, state) -> TransitionCallbackReturn:
         self.session.set_active(True)
         note = self._maybe_record()
@@ -176,20 +247,33 @@ class SimNode(LifecycleNode):
             self.get_logger().info(note[2:])
         return super().on_activate(state)
 
+    @_transition
     def on_deactivate(self, state) -> TransitionCallbackReturn:
         self.session.set_active(False)
         return super().on_deactivate(state)
 
+    @_transition
     def on_cleanup(self, state) -> TransitionCallbackReturn:
         self.session.clear()
         return super().on_cleanup(state)
 
+    @_transition
     def on_shutdown(self, state) -> TransitionCallbackReturn:
         self.session.close("shutdown")
         return super().on_shutdown(state)
 
     # -- services ------------------------------------------------------------------------------
+    @_service
     def _reset(self, request, response):
+        if not self._reset_lock.acquire(blocking=False):
+            response.success, response.message = False, "a reset is already under way; wait for its answer"
+            return response
+        try:
+            return self._reset_now(response)
+        finally:
+            self._reset_lock.release()
+
+    def _reset_now(self, response):
         reason = node_params.check(self.values())
         if reason:
             response.success, response.message = False, f"not reset: {reason}"
@@ -204,8 +288,8 @@ class SimNode(LifecycleNode):
             return response
         try:
             text = self._load()
-        except (ConfigError, ValueError, RuntimeError) as err:
-            response.success, response.message = False, f"not reset, the previous scene stays: {err}"
+        except (ConfigError, ValueError, RuntimeError, OSError, MemoryError) as err:
+            response.success, response.message = False, f"not reset, the previous scene stays: {shown(str(err))}"
             return response
         response.success, response.message = True, f"reset: {text}; {self.session.state}{self._maybe_record()}"
         return response
@@ -214,14 +298,17 @@ class SimNode(LifecycleNode):
         run = self.session.run
         return "no scene" if run is None else f"{run.scene.name}, {run.solver.n} particles, {self.session.state}"
 
+    @_service
     def _set_paused(self, request, response):
         response.success, response.message = self.session.set_paused(request.data)
         return response
 
+    @_service
     def _step(self, request, response):
         response.success, response.message = self.session.step(STEP_WAIT)
         return response
 
+    @_service
     def _record(self, request, response):
         if not request.data:
             path = self.session.stop_recording("stopped")
@@ -254,12 +341,21 @@ class SimNode(LifecycleNode):
             self.get_logger().info(text)
         self._publish_diagnostics()
 
+    @_quiet
+    def _tick(self):
+        """Once a second: /diagnostics, and the recording's open chunk closed if due."""
+        self.session.flush_recording()
+        self._publish_diagnostics()
+
     def _publish_diagnostics(self):
         stats = self.session.stats()
         state = stats["state"]
         level = {"failed": DiagnosticStatus.ERROR,
                  "unconfigured": DiagnosticStatus.WARN}.get(state, DiagnosticStatus.OK)
         message = f"failed: {stats['error']}" if state == "failed" else state
+        if self.internal_error:
+            level, message = DiagnosticStatus.ERROR, f"{message}; {self.internal_error}"
+            stats["internal_error"] = self.internal_error
         if self.awaiting_reset:
             message += f" ({', '.join(sorted(self.awaiting_reset))} changed: applies at the next ~/reset)"
         status = DiagnosticStatus(level=level, name=f"{self.get_name()}: solver", message=message,

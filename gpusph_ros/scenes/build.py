@@ -9,10 +9,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..sph.config import Plane, SolverConfig
+from ..sph.config import ConfigError, Plane, SolverConfig
 from ..sph.solver import Particles
 from ..sph.state import BOUNDARY, FLUID
-from . import reduce
+from . import reduce, resources
 from .boxes import boundary_layers, box_tank, lattice
 from .schema import Scene
 
@@ -85,10 +85,17 @@ def build(scene: Scene, **numerics) -> Model:
         footprints += [(o.lo, o.hi) for o in scene.obstacles]
         for lo, hi in floor_rectangles(scene.tank, footprints, dim):
             boxes.append((tuple(lo) + (0.0,), tuple(hi) + (scene.wet_bed,)))
+    resources.check(scene, cfg, boxes)  # before anything is allocated
     cfg, parts = box_tank(cfg, scene.tank[:dim], boxes, walls=scene.walls, headroom=scene.headroom)
     keep = np.ones(len(parts), dtype=bool)
-    for o in scene.obstacles:
-        keep &= ~((parts.ptype == FLUID) & _inside(parts.pos, o.lo, o.hi, dim))
+    for k, o in enumerate(scene.obstacles):
+        inside = (parts.ptype == FLUID) & _inside(parts.pos, o.lo, o.hi, dim)
+        if inside.any() and not o.displaces_fluid:
+            raise ConfigError(f"obstacles[{k}]", o.name, f"a box clear of the fluid boxes: it covers {inside.sum()} "
+                                                         "fluid particles; displaces_fluid: true removes them")
+        keep &= ~inside
+    if not (keep & (parts.ptype == FLUID)).any():
+        raise ConfigError("fluid", [b.name for b in scene.fluid], "boxes that hold fluid outside the obstacles")
     pos, rho, mass = [parts.pos[keep]], [parts.rho[keep]], [parts.mass[keep]]
     ptype, body = [parts.ptype[keep]], [parts.body[keep]]
     layers = boundary_layers(cfg.boundary, cfg.hdx)

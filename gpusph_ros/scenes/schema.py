@@ -16,10 +16,9 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import yaml
-
 from ..share import config_dir
 from ..sph.config import ConfigError
+from . import yaml_input
 from .boxes import WALL_KINDS, wall_faces
 
 PROBE_TYPES = ("point", "column", "profile", "gauge")
@@ -39,9 +38,12 @@ class Box:
 @dataclass
 class Obstacle(Box):
     """A fixed box of boundary particles whose wrench is reported; ``block_offsets`` [m] are the
-    distances from its upstream and downstream faces at which the thesis's pressure blocks sit."""
+    distances from its upstream and downstream faces at which the thesis's pressure blocks sit.
+    An obstacle that overlaps a fluid box is an error unless ``displaces_fluid`` says the fluid
+    there is to be removed."""
 
     block_offsets: tuple = (0.0, 0.06)
+    displaces_fluid: bool = False
 
 
 @dataclass
@@ -100,16 +102,15 @@ def read_yaml(sub: str, name_or_path, field_name: str, what: str):
     if not path.is_file():
         raise ConfigError(field_name, str(name_or_path),
                           f"a built-in {what} (" + ", ".join(shipped(sub)) + f") or a path to a YAML {what} file")
-    text = path.read_text()
-    try:
-        return path, text, yaml.safe_load(text)
-    except yaml.YAMLError as err:
-        raise ConfigError(field_name, str(path), f"valid YAML ({err})") from None
+    text = yaml_input.read_text(path, field_name)
+    return path, text, yaml_input.parse(text, field_name, str(path))
 
 
 def load_scene(name_or_path) -> Scene:
     """A scene from a built-in name (``builtin_names()``) or a YAML file path."""
     path, text, data = read_yaml("scenes", name_or_path, "scene", "scene")
+    if not isinstance(data, dict):
+        raise ConfigError("scene", str(path), f"a YAML mapping of scene fields (the file holds {type(data).__name__})")
     scene = parse_scene(data, default_name=path.stem)
     scene.text = text
     return scene
@@ -207,14 +208,17 @@ def _obstacles(items, tank, dim) -> list:
     obstacles = []
     for k, item in enumerate(items):
         where = f"obstacles[{k}]"
-        item, name, lo, hi = _box(where, item, tank, dim, extra_keys=("block_offsets",))
+        item, name, lo, hi = _box(where, item, tank, dim, extra_keys=("block_offsets", "displaces_fluid"))
         offsets = item.get("block_offsets", [0.0, 0.06])
         if not isinstance(offsets, list):
             raise ConfigError(f"{where}.block_offsets", offsets, "a list of distances >= 0 [m]")
         offsets = tuple(_number(f"{where}.block_offsets[{j}]", o, lo=0.0) for j, o in enumerate(offsets))
         if lo[up] > 0.0:
             raise ConfigError(f"{where}.lo", list(lo[:dim]), "a box standing on the floor (lo on the vertical axis 0)")
-        obstacles.append(Obstacle(name, lo, hi, offsets))
+        displaces = item.get("displaces_fluid", False)
+        if not isinstance(displaces, bool):
+            raise ConfigError(f"{where}.displaces_fluid", displaces, "true or false")
+        obstacles.append(Obstacle(name, lo, hi, offsets, displaces))
     _unique("obstacles", [o.name for o in obstacles])
     return obstacles
 

@@ -11,15 +11,15 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
-import yaml
-
 from ..sph.config import ConfigError, SolverConfig
+from . import yaml_input
 from .reduce import Reduction, apply
 from .schema import Scene, read_yaml, shipped
 
 # SolverConfig fields that the scene decides, or that the scene builder derives
 SCENE_FIELDS = ("dim", "gravity", "depth", "domain_lo", "domain_hi", "periodic", "planes", "wall_lo", "wall_hi",
                 "solids")
+MAX_OUTPUT_RATE = 10_000.0  # [Hz] simulated: outputs 0.1 ms apart, a wall-pressure transducer's rate
 NUMERIC_FIELDS = tuple(f.name for f in dataclasses.fields(SolverConfig) if f.name not in SCENE_FIELDS)
 
 
@@ -41,7 +41,8 @@ class Output:
 OUTPUT_FIELDS = tuple(f.name for f in dataclasses.fields(Output))
 REDUCTION_FIELDS = tuple(f.name for f in dataclasses.fields(Reduction))
 RUN_KEYS = NUMERIC_FIELDS + OUTPUT_FIELDS + REDUCTION_FIELDS
-_DEFAULTS = {**{f.name: f.default for f in dataclasses.fields(SolverConfig) if f.name in NUMERIC_FIELDS},
+_DEFAULTS = {**{f.name: f.default_factory() if f.default is dataclasses.MISSING else f.default
+                for f in dataclasses.fields(SolverConfig) if f.name in NUMERIC_FIELDS},
              **{f.name: f.default for f in dataclasses.fields(Output)},
              **{f.name: f.default for f in dataclasses.fields(Reduction)}}
 
@@ -74,10 +75,7 @@ def parse_set(item: str) -> tuple:
     key, sep, value = item.partition("=")
     if not sep or not key.strip():
         raise ConfigError("--set", item, "key=value, e.g. dx=0.02 or kernel=quadratic")
-    try:
-        return key.strip(), yaml.safe_load(value)
-    except yaml.YAMLError:
-        return key.strip(), value
+    return key.strip(), yaml_input.value(value)
 
 
 def _coerce(key, value):
@@ -86,6 +84,8 @@ def _coerce(key, value):
         if not isinstance(value, bool):
             raise ConfigError(key, value, "true or false")
     elif isinstance(default, int):
+        if isinstance(value, float) and value.is_integer():
+            value = int(value)  # 1e6
         if isinstance(value, bool) or not isinstance(value, int):
             raise ConfigError(key, value, "an integer")
     elif isinstance(default, float):
@@ -111,8 +111,8 @@ def resolve(scene: Scene, files=(), sets=(), **overrides) -> RunConfig:
     output = Output(**{k: merged.pop(k) for k in OUTPUT_FIELDS if k in merged})
     if not (math.isfinite(output.end_time) and output.end_time > 0.0):
         raise ConfigError("end_time", output.end_time, "a time > 0 [s]")
-    if not (math.isfinite(output.output_rate) and output.output_rate > 0.0):
-        raise ConfigError("output_rate", output.output_rate, "a rate > 0 [Hz]")
+    if not (math.isfinite(output.output_rate) and 0.0 < output.output_rate <= MAX_OUTPUT_RATE):
+        raise ConfigError("output_rate", output.output_rate, f"a rate in (0, {MAX_OUTPUT_RATE:g}] Hz")
     if not (math.isfinite(output.particle_rate) and 0.0 <= output.particle_rate <= output.output_rate):
         raise ConfigError("particle_rate", output.particle_rate,
                           f"a rate from 0 (no particle clouds) to output_rate ({output.output_rate:g} Hz)")

@@ -21,6 +21,18 @@ PRECISIONS = ("float32", "float64")
 # half the difference since it was built (a Verlet list)
 LIST_SKIN = 1.1
 
+# guards against runs that could never finish or never fit (README, "Limits and failure behaviour")
+MIN_CFL = 0.01  # a smaller Courant number takes > 100x the steps of the default for no accuracy
+MIN_DT_FIXED = 1.0e-6  # [s] a fixed step below this is a million steps per simulated second
+MAX_PARTICLES = 50_000_000  # default cap on a run's particles (max_particles)
+_SHOWN = 80  # characters of a refused value quoted in an error
+
+
+def shown(value) -> str:
+    """A refused value as an error quotes it: its repr, cut to a line (never a file's contents)."""
+    text = repr(value)
+    return text if len(text) <= _SHOWN else text[:_SHOWN - 25] + f"... ({len(text)} characters)"
+
 
 def default_device() -> str:
     """The Warp device a run uses unless it names one: $GPUSPH_ROS_DEVICE (cuda:0, say), else cpu."""
@@ -34,7 +46,15 @@ class ConfigError(ValueError):
         self.field = field_name
         self.value = value
         self.allowed = allowed
-        super().__init__(f"{field_name}: {value!r} is not allowed; expected {allowed}")
+        super().__init__(f"{field_name}: {shown(value)} is not allowed; expected {allowed}")
+
+
+def _check_device(device):
+    import warp as wp
+
+    names = [d.alias for d in wp.get_devices()]
+    if device not in names:
+        raise ConfigError("device", device, "a Warp device of this machine: " + ", ".join(names))
 
 
 @dataclass
@@ -72,7 +92,7 @@ class SolverConfig:
     depth: float = 0.4  # reference depth H [m] for c0 and the wall forces
     gravity: tuple = (0.0, 0.0, -9.81)
     cfl: float = 0.3
-    dt_fixed: float = 0.0  # > 0 forces this time step (tests, stability studies)
+    dt_fixed: float = 0.0  # > 0 forces this time step (tests, stability studies); at least MIN_DT_FIXED
     # settling: until settle_until [s], velocities relax with time constant settle_tau [s], so a
     # tank started at rest reaches its discrete equilibrium without bouncing on its walls
     settle_tau: float = 0.0
@@ -80,13 +100,14 @@ class SolverConfig:
     precision: str = "float32"
     device: str = field(default_factory=default_device)
     cpu_threads: int = 0  # threads for the heavy passes on a CPU device; 0 = every core
+    max_particles: int = MAX_PARTICLES  # a scene whose spacing needs more is refused before any allocation
     domain_lo: tuple = (0.0, 0.0, 0.0)
     domain_hi: tuple = (1.0, 1.0, 1.0)
     periodic: tuple = (False, False, False)
     planes: list = field(default_factory=list)
     rho_min_ratio: float = 0.8  # health check: density bounds as fractions of rho0
     rho_max_ratio: float = 1.25
-    # failure detectors for what does not show as NaN (passes.py, CHECKS):
+    # failure detectors for what does not show as NaN (health.py, CHECKS):
     # wall_penetration: a fluid particle deeper than penetration_ratio dx beyond a wall face (the
     # first layer of wall particles sits dx/2 behind it) or inside a solid
     penetration_ratio: float = 0.5
@@ -163,8 +184,15 @@ class SolverConfig:
             positive(name, strict=False)
         if self.mk_beta < 1.0:
             raise ConfigError("mk_beta", self.mk_beta, "a number >= 1 (boundary particles no sparser than fluid)")
-        if self.cfl > 1.0:
-            raise ConfigError("cfl", self.cfl, "a number in (0, 1]")
+        if not MIN_CFL <= self.cfl <= 1.0:
+            raise ConfigError("cfl", self.cfl, f"a number in [{MIN_CFL:g}, 1]")
+        if 0.0 < self.dt_fixed < MIN_DT_FIXED:
+            raise ConfigError("dt_fixed", self.dt_fixed, f"0 (adaptive) or a step >= {MIN_DT_FIXED:g} s")
+        m = self.max_particles
+        number = isinstance(m, (int, float)) and not isinstance(m, bool) and math.isfinite(m)
+        if not (number and m >= 1 and m == int(m)):
+            raise ConfigError("max_particles", m, "a whole number >= 1")
+        _check_device(self.device)
         if not isinstance(self.cpu_threads, int) or self.cpu_threads < 0:
             raise ConfigError("cpu_threads", self.cpu_threads, "an integer >= 0 (0 = every core)")
         if not isinstance(self.shepard_every, int) or self.shepard_every < 0:

@@ -1,0 +1,92 @@
+"""What a model will hold, known before anything is allocated: an upper bound on its particles and
+the memory they take, checked against ``max_particles`` and the free memory of the device and the
+host, so that a spacing a thousand times too fine is refused with the numbers instead of
+exhausting the machine.
+
+Memory per particle (measured with ``Solver.device_bytes`` on DamBreak 1 and the 2D collapse, and
+checked by the tests): the neighbour list, 4 bytes x ``default_max_neighbours`` (248 in 3D, 72 in
+2D at h = 1.3 dx), and 51 scalars of state, half-step, candidate and scratch arrays plus 64 bytes
+of integers. Building the particles on the host takes about HOST_BYTES a particle more.
+"""
+import math
+from pathlib import Path
+
+from ..sph.config import ConfigError, SolverConfig
+from ..sph.solver import default_max_neighbours
+from .boxes import boundary_layers
+
+HOST_BYTES = 200  # numpy arrays of the particle set and the lattice fills, per particle
+_SCALARS, _INTEGER_BYTES = 51, 64
+USABLE = 0.9  # of the free memory a run may plan to take
+
+
+def _cells(length: float, spacing: float) -> int:
+    return max(1, math.ceil(length / spacing - 1e-9))
+
+
+def particle_bound(scene, cfg: SolverConfig, fluid_boxes) -> int:
+    """At least as many particles as ``scenes.build`` makes of ``scene`` at ``cfg.dx``:
+    ``fluid_boxes`` filled, particle walls (``boundary_layers`` layers of the wall spacing) and
+    the obstacles' blocks."""
+    dim, dx = scene.dim, cfg.dx
+    n = sum(math.prod(_cells(hi[ax] - lo[ax], dx) for ax in range(dim)) for lo, hi in fluid_boxes)
+    n += sum(math.prod(_cells(o.hi[ax] - o.lo[ax], dx) for ax in range(dim)) for o in scene.obstacles)
+    faces = [face for face, kind in scene.walls.items() if kind == "particles"]
+    if faces:
+        spacing = dx / cfg.mk_beta if cfg.boundary == "monaghan_kajtar" else dx
+        layers = boundary_layers(cfg.boundary, cfg.hdx) + 1  # the shell sits half a spacing out
+        up = dim - 1
+        outer = [_cells(scene.tank[ax], spacing) + (0 if scene.periodic[ax] else 2 * layers) for ax in range(up)]
+        outer.append(_cells(scene.tank[up], spacing) + layers)
+        for face in faces:  # each face's slab of wall particles, edges counted twice
+            ax = up if face == "floor" else "xy".index(face[0])
+            if not scene.periodic[ax]:
+                n += layers * math.prod(outer[other] for other in range(dim) if other != ax)
+    return n
+
+
+def device_bytes(n: int, cfg: SolverConfig) -> int:
+    """The device memory a solver of ``n`` particles takes (an estimate within a few percent)."""
+    scalar = 8 if cfg.precision == "float64" else 4
+    return n * (4 * default_max_neighbours(cfg.dim, cfg.hdx) + _SCALARS * scalar + _INTEGER_BYTES)
+
+
+def host_free_bytes() -> int:
+    """Available memory of this machine (Linux: MemAvailable), or a very large number elsewhere."""
+    try:
+        for line in Path("/proc/meminfo").read_text().splitlines():
+            if line.startswith("MemAvailable:"):
+                return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return 1 << 62
+
+
+def device_free_bytes(device: str) -> int:
+    import warp as wp
+
+    d = wp.get_device(device)
+    return host_free_bytes() if d.is_cpu else int(d.free_memory)
+
+
+def _gib(b: float) -> str:
+    return f"{b / 2 ** 30:.3g} GiB"
+
+
+def check(scene, cfg: SolverConfig, fluid_boxes):
+    """ConfigError on dx when the model would pass ``max_particles`` or the free memory."""
+    n = particle_bound(scene, cfg, fluid_boxes)
+    need = device_bytes(n, cfg)
+    cpu = cfg.device == "cpu"
+    host = n * HOST_BYTES + (need if cpu else 0)
+    free_dev = None if cpu else device_free_bytes(cfg.device)
+    free_host = host_free_bytes()
+    plan = f"dx = {cfg.dx:g} m needs up to {n:.3g} particles, {_gib(need)} on {cfg.device}"
+    if n > cfg.max_particles:
+        raise ConfigError("dx", cfg.dx, f"a coarser spacing: {plan}; max_particles is {cfg.max_particles:,}")
+    if free_dev is not None and need > USABLE * free_dev:
+        raise ConfigError("dx", cfg.dx, f"a coarser spacing: {plan}; {cfg.device} has {_gib(free_dev)} free")
+    if host > USABLE * free_host:
+        raise ConfigError("dx", cfg.dx, f"a coarser spacing: {plan} and {_gib(host)} of host memory in all; "
+                                        f"this machine has {_gib(free_host)} free")
+    return n, need
