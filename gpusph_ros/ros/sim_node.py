@@ -350,8 +350,8 @@ class SimNode(LifecycleNode):
     def _publish_diagnostics(self):
         stats = self.session.stats()
         state = stats["state"]
-        level = {"failed": DiagnosticStatus.ERROR,
-                 "unconfigured": DiagnosticStatus.WARN}.get(state, DiagnosticStatus.OK)
+        level = {"failed": DiagnosticStatus.ERROR, "unconfigured": DiagnosticStatus.WARN,
+                 "shut down": DiagnosticStatus.WARN}.get(state, DiagnosticStatus.OK)
         message = f"failed: {stats['error']}" if state == "failed" else state
         if self.internal_error:
             level, message = DiagnosticStatus.ERROR, f"{message}; {self.internal_error}"

@@ -25,7 +25,7 @@ LIST_SKIN = 1.1
 MIN_CFL = 0.01  # a smaller Courant number takes > 100x the steps of the default for no accuracy
 MIN_DT_FIXED = 1.0e-6  # [s] a fixed step below this is a million steps per simulated second
 MAX_PARTICLES = 50_000_000  # default cap on a run's particles (max_particles)
-_SHOWN = 80  # characters of a refused value quoted in an error
+_SHOWN = 240  # characters of a refused value quoted in an error (a long path fits)
 
 
 def shown(value) -> str:

@@ -1,0 +1,254 @@
+"""sim_node against a hostile but realistic client (issue 12's list): bad scene files set as the
+`scene` parameter, spacings and folders the machine cannot hold, a step whose target goes away, a
+storm of calls from several threads with recordings toggling, a SIGKILL while recording, a node
+started on a bad scene, and services after shut-down. Every call must be answered within 2 s and
+the node must be alive at the end; nothing a client sends may stop it.
+
+Each test starts its own node (the venv's `sim_node`, DamBreak 1 at 6 cm) on a DDS domain of its
+own, so no test depends on another."""
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from rosbags.highlevel import AnyReader
+from rosgraph_msgs.msg import Clock
+from std_srvs.srv import SetBool, Trigger
+
+from ros_client import Client
+
+pytestmark = pytest.mark.ros
+
+REPO = Path(__file__).resolve().parents[1]
+BIN = Path(sys.executable).parent
+BASE_DOMAIN = 20 + 4 * (os.getpid() % 15)  # four domains of this run's own, apart from test_sim_node's
+ANSWER = 2.0  # [s] the longest any call may take
+SECRET = "a-line-of-a-private-file"
+
+
+class Node:
+    """A sim_node process and a client of it on a domain of its own."""
+
+    def __init__(self, tmp_path, domain, *params):
+        self.log = tmp_path / f"node_{domain}.log"
+        env = {**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
+               "PYTHONUNBUFFERED": "1"}
+        args = ["-p", "dx:=0.06", "-p", "end_time:=30.0", *[a for p in params for a in ("-p", p)]]
+        self.proc = subprocess.Popen([str(BIN / "sim_node"), "--ros-args", "--params-file",
+                                      str(REPO / "config/params/dambreak1_thesis.yaml"), *args],
+                                     env=env, stdout=open(self.log, "w"), stderr=subprocess.STDOUT)
+        self.client = Client(domain)
+        self.client.subscribe("/clock", Clock)
+        self.client.subscribe("/diagnostics", DiagnosticArray)
+
+    def alive(self) -> bool:
+        return self.proc.poll() is None and "dx" in self.client.get("dx")
+
+    def status(self, predicate=lambda s: True, timeout=30.0) -> dict:
+        def status(msg):
+            s = msg.status[0]
+            return {**{kv.key: kv.value for kv in s.values}, "level": s.level, "message": s.message}
+
+        msgs = self.client.wait_for("/diagnostics", lambda ms: any(predicate(status(m)) for m in ms), timeout)
+        return [status(m) for m in msgs if predicate(status(m))][-1]
+
+    def close(self, sig=signal.SIGINT):
+        self.client.close()
+        if self.proc.poll() is None:
+            self.proc.send_signal(sig)
+            try:
+                self.proc.wait(timeout=60)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+
+
+@pytest.fixture
+def node(tmp_path, request):
+    n = Node(tmp_path, BASE_DOMAIN + getattr(request, "param", 0))
+    try:
+        n.status(lambda s: s["state"] == "running", timeout=300.0)
+    except TimeoutError:
+        n.close()
+        pytest.fail("the node did not start:\n" + n.log.read_text()[-3000:])
+    yield n
+    n.close()
+
+
+def timed(fn, *args, **kwargs):
+    start = time.monotonic()
+    out = fn(*args, **kwargs)
+    took = time.monotonic() - start
+    assert took < ANSWER, f"{fn.__name__} took {took:.1f} s"
+    return out
+
+
+def _bad_scenes(tmp_path) -> dict:
+    files = {"binary": b"\x00\x89PNG\r\n" + os.urandom(200), "latin1": "caf\xe9: 1\n".encode("latin-1"),
+             "deep": b"a: " + b"[" * 100_000 + b"]" * 100_000,
+             "alias_bomb": b"a: &a [x, x, x, x, x, x, x, x]\n" + b"".join(
+                 f"{chr(98 + k)}: &{chr(98 + k)} [*{chr(97 + k)}, *{chr(97 + k)}, *{chr(97 + k)}]\n".encode()
+                 for k in range(20)),
+             "private_text": (SECRET + "\n").encode(), "huge": b"# " + b"x" * (2 << 20)}
+    paths = {}
+    for name, data in files.items():
+        paths[name] = tmp_path / f"{name}.yaml"
+        paths[name].write_bytes(data)
+    return paths
+
+
+def test_bad_scene_files_are_refused_at_once_and_leak_nothing(node, tmp_path):
+    for name, path in _bad_scenes(tmp_path).items():
+        result, = timed(node.client.set, scene=str(path))
+        assert not result.successful, name
+        assert result.reason.startswith("scene:") and str(path) in result.reason, (name, result.reason)
+        assert SECRET not in result.reason
+    assert node.client.get("scene") == {"scene": "dambreak1_thesis"}
+    assert node.alive()
+
+
+def test_what_the_machine_cannot_hold_is_refused_with_the_numbers(node, tmp_path):
+    client = node.client
+    assert timed(client.set, dx=0.001)[0].successful  # in the parameter's range; the plan refuses it
+    reply = timed(client.call, "reset", Trigger)
+    assert not reply.success and "particles" in reply.message and "GiB" in reply.message, reply.message
+    assert timed(client.set, dx=0.06)[0].successful
+    result, = timed(client.set, output_rate=1.0e9)
+    assert not result.successful and "output_rate" in result.reason
+    result, = timed(client.set, record_dir=str(REPO / "setup.py" / "bags"))
+    assert not result.successful and "record_dir" in result.reason
+    proc_dir = "/proc/no_such_folder"  # writable-looking to root, refused by the kernel
+    if timed(client.set, record_dir=proc_dir)[0].successful:
+        reply = timed(client.call, "reset", Trigger)
+        assert reply.success and "not recording" in reply.message, reply.message
+        assert timed(client.set, record_dir="")[0].successful
+    assert node.alive()
+
+
+def test_a_step_whose_target_goes_away_answers_at_once_and_blocks_nothing(node):
+    client = node.client
+    for name, srv in (("set_paused", SetBool), ("step", Trigger), ("record", SetBool)):
+        client.call(name, srv, **({"data": False} if srv is SetBool else {}))  # make the service clients
+    assert timed(client.call, "set_paused", SetBool, data=True).success
+    assert client.call("step", Trigger, timeout=30.0).success
+    assert timed(client.set, output_rate=10.0)[0].successful
+    replies = {}
+    worker = threading.Thread(target=lambda: replies.update(step=client.call("step", Trigger, timeout=30.0)))
+    start = time.monotonic()
+    worker.start()
+    time.sleep(0.15)
+    assert timed(client.set, output_rate=0.0)[0].successful
+    assert timed(client.call, "set_paused", SetBool, data=True).success  # not queued behind the step
+    worker.join(timeout=30.0)
+    assert time.monotonic() - start < 0.15 + 2 * ANSWER + 1.0, "the step waited for nothing"
+    reply = replies["step"]
+    assert reply.success or "output settings changed" in reply.message, reply.message
+    assert node.alive()
+
+
+def test_a_storm_of_calls_with_recordings_toggling_is_answered(node, tmp_path):
+    client = node.client
+    assert client.set(record_dir=str(tmp_path / "bags"))[0].successful
+    for name, srv in (("set_paused", SetBool), ("step", Trigger), ("record", SetBool)):
+        client.call(name, srv, **({"data": False} if srv is SetBool else {}))
+    failures, times = [], []
+
+    def storm(seed):
+        rng = np.random.default_rng(seed)
+        for _ in range(50):
+            kind = rng.integers(6)
+            start = time.monotonic()
+            try:
+                if kind == 0:
+                    client.call("set_paused", SetBool, timeout=ANSWER, data=bool(rng.integers(2)))
+                elif kind == 1:
+                    client.call("record", SetBool, timeout=ANSWER, data=bool(rng.integers(2)))
+                elif kind == 2:
+                    client.call("step", Trigger, timeout=ANSWER)
+                elif kind == 3:
+                    client.set(cfl=float(rng.choice([0.2, 0.25, 0.3])))
+                elif kind == 4:
+                    client.set(output_rate=float(rng.choice([0.0, 20.0, 50.0])))
+                else:
+                    client.get("cfl", "scene", "output_rate")
+            except TimeoutError:
+                failures.append(kind)
+            times.append((kind, time.monotonic() - start))
+
+    threads = [threading.Thread(target=storm, args=(k,)) for k in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(timeout=300.0)
+    assert not failures, failures
+    slow = [(k, s) for k, s in times if s > ANSWER]
+    assert not slow, slow
+    assert len(times) == 200
+    client.call("record", SetBool, data=False)
+    for bag in (tmp_path / "bags").iterdir():  # every recording the storm made reads back
+        with AnyReader([bag]) as reader:
+            assert reader.message_count >= 0
+    assert node.alive()
+
+
+def test_a_sigkill_while_recording_small_messages_loses_at_most_the_last_interval(tmp_path):
+    node = Node(tmp_path, BASE_DOMAIN + 1, "publish_particles:=false", "real_time_factor:=0.05",
+                f"record_dir:={tmp_path / 'bags'}")
+    try:
+        status = node.status(lambda s: s["state"] == "running" and s["recording"], timeout=300.0)
+        node.client.clear("/clock")
+        time.sleep(3.0)
+        killed_at = time.monotonic()
+        sent = list(zip(node.client.arrivals["/clock"], node.client.received("/clock")))
+        node.proc.kill()
+        node.proc.wait()
+    finally:
+        node.close()
+    bag = Path(status["recording"])
+    fixed = subprocess.run([sys.executable, "-m", "gpusph_ros.cli", "analyze", "--repair", str(bag)],
+                           capture_output=True, text=True, timeout=120)
+    assert fixed.returncode == 0, fixed.stdout + fixed.stderr
+    with AnyReader([bag]) as reader:
+        stamps = [t * 1e-9 for c, t, _ in reader.messages() if c.topic == "/clock"]
+    # every output published more than one flush interval (1 s, plus 0.5 s of slack) before the
+    # kill is in the repaired bag
+    early = [m.clock.sec + m.clock.nanosec * 1e-9 for arrived, m in sent if arrived < killed_at - 1.5]
+    assert len(early) >= 5 and max(stamps) >= max(early) - 1e-9, (len(stamps), early[-3:], stamps[-3:])
+    info = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    assert info["message_count"] >= len(stamps)
+
+
+def test_a_node_on_a_bad_scene_stays_up_and_refuses_everything_after_shutdown(tmp_path):
+    from lifecycle_msgs.msg import Transition
+    from lifecycle_msgs.srv import ChangeState
+
+    bad = _bad_scenes(tmp_path)["binary"]
+    node = Node(tmp_path, BASE_DOMAIN + 2, f"scene:={bad}")
+    try:
+        client = node.client
+        status = node.status(lambda s: s["state"] == "unconfigured", timeout=300.0)
+        assert "unconfigured" in status["message"]
+        assert "cannot configure: scene:" in node.log.read_text()  # said why, once, in the log
+        reply = timed(client.call, "reset", Trigger, timeout=60.0)
+        assert not reply.success and "scene:" in reply.message, reply.message
+        assert client.set(scene="dambreak1_thesis")[0].successful
+        reply = client.call("reset", Trigger, timeout=120.0)
+        assert reply.success, reply.message
+        node.status(lambda s: s["state"] == "running")
+        assert client.call("change_state", ChangeState, timeout=60.0,
+                           transition=Transition(id=Transition.TRANSITION_ACTIVE_SHUTDOWN)).success
+        for name, srv, fields in (("reset", Trigger, {}), ("step", Trigger, {}), ("set_paused", SetBool,
+                                                                                   {"data": False}),
+                                  ("record", SetBool, {"data": True})):
+            reply = timed(client.call, name, srv, **fields)
+            assert not reply.success and "shut down" in reply.message, (name, reply.message)
+        assert node.status(lambda s: s["state"] == "shut down")["level"] == DiagnosticStatus.WARN
+        assert node.proc.poll() is None
+    finally:
+        node.close()
