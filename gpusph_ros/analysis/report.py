@@ -192,16 +192,22 @@ def table(report) -> str:
         head.insert(2, "WARNING: the run did not complete; these metrics cover "
                        f"t <= {report.get('covers_until', 0):.3g} s only "
                        "and are not comparable with a finished run")
-    compared = report.get("reference_data") is not None
-    if not compared:
-        head.insert(-1, "no reference data found (the package's data/ folder is missing from this install): "
-                        "this run's values alone, no experiment or GPUSPH columns")
+    # a column with nothing to compare against goes, and one line says why
+    columns = [0, 1, 2, 3, 4]
+    if report.get("reference_data") is None:
+        head[head.index(gp)] = ("no reference data found (the package's data/ folder is missing from this install): "
+                                "this run's values alone, no experiment or GPUSPH columns")
+        columns = [0, 1, 4]
+    elif report["metrics"] and all(m["gpusph"] is None for m in report["metrics"]):
+        if report.get("gpusph_case") and scen:
+            head[head.index(gp)] = (f"GPUSPH: the thesis has no run of scenario {scen} at dx = {report['dx']:g} m "
+                                    "(data/thesis_2011 lists its spacings): no GPUSPH column")
+        columns.remove(3)
     rows = [("metric", "unit", "experiment", "GPUSPH (thesis)", "this run")]
     for m in report["metrics"]:
         rows.append((m["label"], m["unit"], fmt(m["experiment"]), fmt(m["gpusph"], m.get("gpusph_error_pct")),
                      fmt(m["value"], m.get("error_pct")) + (f"  [{m['note']}]" if m["note"] else "")))
-    if not compared:
-        rows = [(r[0], r[1], r[4]) for r in rows]
+    rows = [tuple(r[k] for k in columns) for r in rows]
     widths = [max(len(r[k]) for r in rows) for k in range(len(rows[0]) - 1)]
     lines = ["  ".join(r[k].ljust(widths[k]) for k in range(len(widths))) + "  " + r[-1] for r in rows]
     return "\n".join(head + lines)
