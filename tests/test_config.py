@@ -16,7 +16,6 @@ pytestmark = pytest.mark.unit
     ("cfl", 1.5, "[0.01, 1]"),
     ("cfl", 1.0e-12, "[0.01, 1]"),
     ("dt_fixed", 1.0e-12, "0 (adaptive) or a step >= 1e-06 s"),
-    ("device", "tpu", "a Warp device of this machine: cpu"),
     ("max_particles", 0, "a whole number >= 1"),
     ("dx", -0.01, "> 0"),
     ("hdx", 0.0, "> 0"),

@@ -92,6 +92,14 @@ def test_a_spacing_too_fine_is_refused_with_the_numbers_before_any_allocation():
     assert re.search(r"of host memory in all; this machine has [\d.]+ GiB free$", str(err.value)), str(err.value)
 
 
+def test_a_device_this_machine_lacks_is_refused_where_a_model_is_built_with_the_list():
+    for device in ("tpu", "cuda:7"):
+        with pytest.raises(ConfigError) as err:
+            build(load_scene("dambreak1_thesis"), dx=0.06, device=device)
+        text = str(err.value)
+        assert text.startswith(f"device: '{device}'") and "a Warp device of this machine: cpu" in text
+
+
 def _with_obstacle(tmp_path, obstacle: str) -> str:
     text = load_scene("dambreak1_thesis").text.replace("obstacles:", "obstacles:\n" + obstacle, 1)
     path = tmp_path / "scene.yaml"

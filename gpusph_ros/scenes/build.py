@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..sph.config import ConfigError, Plane, SolverConfig
+from ..sph.config import ConfigError, Plane, SolverConfig, check_device
 from ..sph.solver import Particles
 from ..sph.state import BOUNDARY, FLUID
 from . import reduce, resources
@@ -85,6 +85,7 @@ def build(scene: Scene, **numerics) -> Model:
         footprints += [(o.lo, o.hi) for o in scene.obstacles]
         for lo, hi in floor_rectangles(scene.tank, footprints, dim):
             boxes.append((tuple(lo) + (0.0,), tuple(hi) + (scene.wet_bed,)))
+    check_device(cfg.device)
     resources.check(scene, cfg, boxes)  # before anything is allocated
     cfg, parts = box_tank(cfg, scene.tank[:dim], boxes, walls=scene.walls, headroom=scene.headroom)
     keep = np.ones(len(parts), dtype=bool)

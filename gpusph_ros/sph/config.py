@@ -49,7 +49,9 @@ class ConfigError(ValueError):
         super().__init__(f"{field_name}: {shown(value)} is not allowed; expected {allowed}")
 
 
-def _check_device(device):
+def check_device(device):
+    """ConfigError unless ``device`` is one of this machine's Warp devices. Checked where a model is
+    built, not in ``validate``: a study or plan may name a device of another machine."""
     import warp as wp
 
     names = [d.alias for d in wp.get_devices()]
@@ -192,7 +194,6 @@ class SolverConfig:
         number = isinstance(m, (int, float)) and not isinstance(m, bool) and math.isfinite(m)
         if not (number and m >= 1 and m == int(m)):
             raise ConfigError("max_particles", m, "a whole number >= 1")
-        _check_device(self.device)
         if not isinstance(self.cpu_threads, int) or self.cpu_threads < 0:
             raise ConfigError("cpu_threads", self.cpu_threads, "an integer >= 0 (0 = every core)")
         if not isinstance(self.shepard_every, int) or self.shepard_every < 0:

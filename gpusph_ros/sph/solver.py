@@ -13,7 +13,7 @@ import numpy as np
 import warp as wp
 
 from . import boundaries, density, health, kernels, passes, viscosity
-from .config import SolverConfig
+from .config import SolverConfig, check_device
 from .health import HealthError
 from .launch import Launcher
 from .neighbours import NeighbourList, NeighbourOverflow
@@ -74,6 +74,7 @@ class Solver:
         cfg = self.config
         self.scalar = wp.float64 if cfg.precision == "float64" else wp.float32
         self.vec = wp.types.vector(3, self.scalar)
+        check_device(cfg.device)
         self.device = wp.get_device(cfg.device)
         self.n = len(particles)
         if self.n == 0:
