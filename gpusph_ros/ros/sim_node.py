@@ -331,15 +331,26 @@ class SimNode(LifecycleNode):
     # -- output --------------------------------------------------------------------------------
     def _publish(self, topic, msg, data):
         publisher = self._topic_pubs.get(topic)
-        if publisher is not None:
+        if publisher is None:
+            return
+        try:
             publisher.publish(data)
+        except Exception:
+            if self.context.ok():
+                raise
+            # SIGINT or SIGTERM shut the context down under the solver thread: the outputs stop
+            # here and main() finishes the recording as interrupted
 
     def _report(self, level, text):
         if level == "error":
             self.get_logger().error(text)
         else:
             self.get_logger().info(text)
-        self._publish_diagnostics()
+        try:
+            self._publish_diagnostics()
+        except Exception:
+            if self.context.ok():
+                raise  # shutting down, the diagnostic has no one to go to
 
     @_quiet
     def _tick(self):
