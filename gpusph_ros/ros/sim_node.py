@@ -350,7 +350,8 @@ class SimNode(LifecycleNode):
             self._publish_diagnostics()
         except Exception:
             if self.context.ok():
-                raise  # shutting down, the diagnostic has no one to go to
+                raise
+            # shutting down: the diagnostic has no one to go to
 
     @_quiet
     def _tick(self):
