@@ -143,6 +143,9 @@ def test_killed_run_leaves_its_complete_chunks_readable(tmp_path):
     info = yaml.safe_load((out / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
     assert info["message_count"] == count
     assert read(out).result["status"] == f"killed: repaired, {count} messages recovered"
+    again = subprocess.run([sys.executable, "-m", "gpusph_ros.cli", "analyze", "--repair", str(out)],
+                           capture_output=True, text=True, timeout=120)
+    assert again.returncode == 0 and "is whole: nothing to repair" in again.stdout, again.stdout + again.stderr
 
 
 def test_sigterm_finishes_the_file(tmp_path):

@@ -26,7 +26,7 @@ import yaml
 from mcap.exceptions import McapError
 from mcap.records import Channel, Header, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader
-from mcap.writer import CompressionType, Writer
+from mcap.writer import MCAP0_MAGIC, CompressionType, Writer
 from rclpy.serialization import serialize_message
 
 from . import msgdefs
@@ -197,22 +197,16 @@ def repair(path) -> dict:
     if not files:
         raise FileNotFoundError(f"{path}: no .mcap file here; expected a bag directory")
     source = files[0]
+    with open(source, "rb") as f:  # a finished file ends with the magic after its footer
+        f.seek(max(0, source.stat().st_size - len(MCAP0_MAGIC)))
+        if f.read() == MCAP0_MAGIC:
+            return {"repaired": False, "file": str(source)}
     cut = source.with_name(source.name + ".cut")
-    topics, count, first, last, whole = {}, 0, None, None, True
-    with open(source, "rb") as f:
-        reader = StreamReader(f, skip_magic=False)
-        try:
-            for _ in reader.records:
-                pass
-        except (McapError, EOFError, ValueError, KeyError, IndexError):
-            whole = False
-    if whole:
-        return {"repaired": False, "file": str(source)}
     source.replace(cut)
-    writer_file = _FlushingFile(source)
-    writer = Writer(writer_file, chunk_size=CHUNK_SIZE, compression=CompressionType.NONE)
+    topics, count, first, last = {}, 0, None, None
     schemas, channels, result = {}, {}, False
-    with open(cut, "rb") as f:
+    with open(cut, "rb") as f, open(source, "wb") as out:
+        writer = Writer(out, chunk_size=CHUNK_SIZE, compression=CompressionType.NONE)
         try:
             for record in StreamReader(f).records:
                 if isinstance(record, Header):
@@ -239,10 +233,9 @@ def repair(path) -> dict:
                     last = record.log_time if last is None else max(last, record.log_time)
         except (McapError, EOFError, ValueError, KeyError, IndexError):
             pass  # the cut: everything after the last complete chunk is lost
-    if not result:
-        writer.add_metadata("gpusph_ros.result", {"status": f"killed: repaired, {count} messages recovered"})
-    writer.finish()
-    writer_file.close()
+        if not result:
+            writer.add_metadata("gpusph_ros.result", {"status": f"killed: repaired, {count} messages recovered"})
+        writer.finish()
     write_metadata_yaml(path, source.name, topics, count, first, last)
     return {"repaired": True, "file": str(source), "cut_file": str(cut), "messages": count,
             "topics": {name: e["count"] for name, e in topics.items()}}

@@ -331,27 +331,24 @@ class SimNode(LifecycleNode):
     # -- output --------------------------------------------------------------------------------
     def _publish(self, topic, msg, data):
         publisher = self._topic_pubs.get(topic)
-        if publisher is None:
-            return
+        if publisher is not None:
+            self._send(publisher, data)
+
+    def _send(self, publisher, message):
+        """Publish, unless SIGINT or SIGTERM has shut the context down under the solver thread:
+        then the outputs stop quietly and main() finishes the recording as interrupted."""
         try:
-            publisher.publish(data)
+            publisher.publish(message)
         except Exception:
             if self.context.ok():
                 raise
-            # SIGINT or SIGTERM shut the context down under the solver thread: the outputs stop
-            # here and main() finishes the recording as interrupted
 
     def _report(self, level, text):
         if level == "error":
             self.get_logger().error(text)
         else:
             self.get_logger().info(text)
-        try:
-            self._publish_diagnostics()
-        except Exception:
-            if self.context.ok():
-                raise
-            # shutting down: the diagnostic has no one to go to
+        self._publish_diagnostics()
 
     @_quiet
     def _tick(self):
@@ -375,7 +372,7 @@ class SimNode(LifecycleNode):
         status.values = [KeyValue(key=key, value=_text(value)) for key, value in stats.items()]
         msg = DiagnosticArray(status=[status])
         msg.header.stamp = messages.stamp(stats.get("simulated_time", 0.0))
-        self._diag_pub.publish(msg)
+        self._send(self._diag_pub, msg)
 
 
 def _text(value) -> str:
