@@ -113,8 +113,8 @@ def _check_one(p: Param, value):
         return f"device: {value!r} is not available here; the devices are {', '.join(_device_names())}"
     elif p.name == "frame_id" and not value.strip():
         return "frame_id: an empty frame is not allowed; e.g. world"
-    elif p.name == "record_dir" and value and folder_problem(value):
-        return f"record_dir: {value!r} cannot be written: {folder_problem(value)}"
+    elif p.name == "record_dir" and value and (problem := folder_problem(value)):
+        return f"record_dir: {value!r} cannot be written: {problem}"
     return None
 
 
