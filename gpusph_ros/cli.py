@@ -26,6 +26,8 @@ def _progress(run, stream=sys.stdout):
     eta = run.wall / max(frac, 1e-9) * (1.0 - frac)
     line = (f"[{bar}] t = {solver.time:7.3f} / {end:g} s  {solver.steps:7d} steps  {rate:6.1f} steps/s  "
             f"{run.mipps():5.3f} MIPPS  ETA {eta:6.0f} s")
+    if solver.excluded_particles:
+        line += f"  excluded {solver.excluded_particles} ({solver.excluded_fraction:.3%})"
     tty = stream.isatty()
     last = run.done
     # off a terminal, print about every 5% so logs stay short
@@ -52,6 +54,7 @@ def run_main(argv=None):
     import warp as wp
 
     wp.config.log_level = wp.LOG_WARNING  # no per-module load lines
+    from .analysis import report as R
     from .output.recording import folder_problem
     from .runner import Run
     from .scenes.schema import load_scene
@@ -75,8 +78,8 @@ def run_main(argv=None):
     start = time.perf_counter()
     result = run.execute(recorder, progress=None if args.quiet else _progress)
     print(f"{result['status']}: {result['steps']} steps, t = {result['simulated_time_s']:.4g} s, wall "
-          f"{time.perf_counter() - start:.1f} s, {result['mipps']} MIPPS; recorded {recorder.count} messages "
-          f"to {args.out}", flush=True)
+          f"{time.perf_counter() - start:.1f} s, {result['mipps']} MIPPS; {R.excluded_line(result)}; recorded "
+          f"{recorder.count} messages to {args.out}", flush=True)
     return 0 if result["status"] == "completed" else 2
 
 

@@ -154,7 +154,16 @@ class Run:
             recorder.close(result)
         return result
 
+    def exclusions(self) -> dict:
+        """The fluid particles excluded so far (sph.health): how many, their share of the fluid
+        mass, by reason ('density_bounds 3, wall_penetration 1' or 'none'), the time of the first."""
+        s = self.solver
+        return {"excluded_particles": s.excluded_particles, "excluded_fraction": s.excluded_fraction,
+                "excluded_by_reason": s.describe_excluded(s.excluded.values()),
+                "first_excluded_time_s": s.first_excluded_time}
+
     def result(self, status: str) -> dict:
         """The result record a recording closes with."""
         return {"status": status, "wall_time_s": round(self.wall, 3), "steps": self.solver.steps,
-                "simulated_time_s": self.solver.time, "mipps": round(self.mipps(), 4), "outputs": self.next_output}
+                "simulated_time_s": self.solver.time, "mipps": round(self.mipps(), 4), "outputs": self.next_output,
+                **self.exclusions()}

@@ -1,5 +1,6 @@
 """Health checks: a step far above the stable time step is caught before a NaN reaches the state,
-and the state from before the failing step is kept."""
+and the state from before the failing step is kept, whether a particle's fault fails the run
+(max_excluded_fraction 0) or the faults exclude more fluid than the limit allows."""
 import numpy as np
 import pytest
 
@@ -34,12 +35,12 @@ def test_stable_dt_runs_clean():
     assert np.isfinite(snap["pos"]).all() and np.isfinite(snap["rho"]).all()
 
 
-@pytest.mark.parametrize("factor", [20.0, 200.0])
-def test_unstable_dt_raises_and_keeps_the_last_healthy_state(factor):
+@pytest.mark.parametrize("factor, max_excluded", [(20.0, 0.0), (200.0, 0.0), (20.0, 0.01)])
+def test_unstable_dt_raises_and_keeps_the_last_healthy_state(factor, max_excluded):
     cfg, parts = column()
     stable = Solver(cfg, parts)
     stable.step()
-    cfg_bad = cfg.replace(dt_fixed=factor * stable.dt)
+    cfg_bad = cfg.replace(dt_fixed=factor * stable.dt, max_excluded_fraction=max_excluded)
     solver = Solver(cfg_bad, parts)
     before = solver.snapshot()
     with pytest.raises(HealthError) as err:
@@ -51,7 +52,11 @@ def test_unstable_dt_raises_and_keeps_the_last_healthy_state(factor):
     assert e.check in CHECKS
     assert e.step == steps_before + 1
     assert e.time == pytest.approx(t_before + cfg_bad.dt_fixed)
-    assert 0 <= e.particle < solver.n
+    if max_excluded:
+        assert e.check == "excluded_fraction" and e.particle == -1
+        assert "of the fluid mass would be excluded" in str(e)
+    else:
+        assert 0 <= e.particle < solver.n
     assert str(e.step) in str(e) and e.check in str(e)
     after = solver.snapshot()
     for key in ("pos", "vel", "rho"):

@@ -2,7 +2,8 @@
 `scene` parameter, spacings and folders the machine cannot hold, a step whose target goes away, a
 storm of calls from several threads with recordings toggling, a SIGKILL while recording, a node
 started on a bad scene, and services after shut-down. Every call must be answered within 2 s and
-the node must be alive at the end; nothing a client sends may stop it.
+the node must be alive at the end; nothing a client sends may stop it. And a run that loses
+particles: /diagnostics WARN while they are excluded, ERROR once they pass max_excluded_fraction.
 
 Each test starts its own node (the venv's `sim_node`, DamBreak 1 at 6 cm) on a DDS domain of its
 own, so no test depends on another."""
@@ -252,5 +253,40 @@ def test_a_node_on_a_bad_scene_stays_up_and_refuses_everything_after_shutdown(tm
             assert not reply.success and "shut down" in reply.message, (name, reply.message)
         assert node.status(lambda s: s["state"] == "shut down")["level"] == DiagnosticStatus.WARN
         assert node.proc.poll() is None
+    finally:
+        node.close()
+
+
+# a column dropped 0.45 m onto a Lennard-Jones floor too weak to hold it (its strength 5 g H is
+# taken with H = 0.1 mm): from t ~ 0.30 s its particles go through, and are excluded
+SINKING = """
+name: sinking_column
+dim: 2
+tank: [0.3429, 0.6]
+depth: 0.0001
+walls: particles
+fluid:
+  - {name: column, lo: [0.0, 0.45], hi: [0.05715, 0.5643]}
+run: {energy_growth_ratio: 0.0}
+"""
+
+
+def test_diagnostics_warn_while_particles_are_excluded_and_error_past_the_limit(tmp_path):
+    scene = tmp_path / "sinking.yaml"
+    scene.write_text(SINKING)
+    node = Node(tmp_path, BASE_DOMAIN + 3, f"scene:={scene}", "dx:=0.00381", "boundary:=lennard_jones", "c0:=10.6",
+                "max_excluded_fraction:=0.9", "publish_particles:=false")
+    try:
+        ok = node.status(lambda s: s["state"] in ("running", "failed"), timeout=120.0)
+        assert ok["level"] == DiagnosticStatus.OK and ok["excluded_particles"] == "0"
+        warn = node.status(lambda s: s["state"] == "running" and s["excluded_particles"] != "0", timeout=120.0)
+        assert warn["level"] == DiagnosticStatus.WARN, warn
+        assert "fluid particles excluded" in warn["message"] and "% of the fluid mass" in warn["message"]
+        assert 0.0 < float(warn["excluded_fraction"]) < 0.9 and float(warn["first_excluded_time_s"]) > 0.25
+        # the limit lowered below what is already excluded: the next step fails the run
+        assert node.client.set(max_excluded_fraction=0.001)[0].successful
+        err = node.status(lambda s: s["state"] == "failed", timeout=60.0)
+        assert err["level"] == DiagnosticStatus.ERROR and "excluded_fraction" in err["message"], err
+        assert node.alive()
     finally:
         node.close()

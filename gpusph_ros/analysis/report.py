@@ -162,6 +162,20 @@ def analyse(path, data=None) -> dict:
     return report, curves
 
 
+def excluded_line(result: dict) -> str:
+    """'excluded 3 fluid particles (0.05% of the fluid mass: density_bounds 3; the first at
+    t = 0.41 s)' or 'no particle excluded', from a result record (values may be text, as read
+    back from a recording)."""
+    if "excluded_particles" not in result:
+        return "exclusions not recorded"
+    n = int(float(result["excluded_particles"]))
+    if not n:
+        return "no particle excluded"
+    first = result.get("first_excluded_time_s")
+    return (f"excluded {n} fluid particle{'s' if n > 1 else ''} ({float(result['excluded_fraction']):.3%} of the "
+            f"fluid mass: {result.get('excluded_by_reason')}; the first at t = {float(first):.4g} s)")
+
+
 def fmt(value, err=None):
     """A value to three figures, its percent error in brackets; "-" for none."""
     if value is None or (isinstance(value, float) and not np.isfinite(value)):
@@ -184,8 +198,8 @@ def table(report) -> str:
             f"{report['boundary']} boundaries, {report['precision']} on {report['device']}",
             f"{report['particles']:,} particles ({report['fluid_particles']:,} fluid); "
             f"status {res.get('status', 'unknown (no result record: killed?)')}, "
-            f"wall {res.get('wall_time_s', '?')} s, {res.get('steps', '?')} steps, {res.get('mipps', '?')} MIPPS",
-            gp, ""]
+            f"wall {res.get('wall_time_s', '?')} s, {res.get('steps', '?')} steps, {res.get('mipps', '?')} MIPPS; "
+            + excluded_line(res), gp, ""]
     if report.get("velocity_probe"):
         head.insert(-1, f"velocity probe at {report['velocity_probe']} m")
     if res.get("status") != "completed":

@@ -1,9 +1,9 @@
 """The particle state of an output as rows of float32, packed on the solver's device.
 
 One row per particle in scene order (the order the scene built them: fluid first, then boundary;
-the solver keeps its arrays sorted into cells), columns x, y, z and then the chosen fields. One
-kernel writes the rows into a device buffer, which on a GPU is copied into one reusable host
-buffer; on the CPU the device buffer is the host buffer. No per-particle Python, no float64
+the solver keeps its arrays sorted into cells), excluded particles left out, columns x, y, z and
+then the chosen fields. One kernel writes the rows into a device buffer, which on a GPU is copied
+into one reusable host buffer; on the CPU the device buffer is the host buffer. No per-particle Python, no float64
 round trip: the copy off the device is the only pass over the data before serialisation.
 """
 import functools
@@ -62,7 +62,7 @@ class CloudPacker:
 
     def pack(self) -> np.ndarray:
         """The rows, (n, 3 + fields) float32: a view of the reusable host buffer, valid until
-        the next call."""
+        the next call. Excluded particles (sph.health) are left out, the others keep their order."""
         s = self.solver
         s.update_pressure()
         # on every core of a CPU (the solver's launcher): a memory-bound scatter of 32 B a particle
@@ -70,4 +70,5 @@ class CloudPacker:
         if self._host is not self._rows:
             wp.copy(self._host, self._rows)  # into pinned memory: asynchronous until the sync below
         wp.synchronize_device(s.device)
-        return self._host.numpy()
+        rows = self._host.numpy()
+        return rows[s.kept()] if s.excluded_particles else rows

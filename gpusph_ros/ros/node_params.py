@@ -60,6 +60,9 @@ PARAMS = (
     Param("cfl", 0.3, "Courant number of the adaptive time step (Monaghan 1992, as GPUSPH)", LIVE, lo=0.01, hi=1.0),
     Param("c0", 0.0, "speed of sound [m/s]; 0 = 10 sqrt(g H) with the scene's depth H (thesis Section 2.3)",
           LIVE, lo=0.0, hi=1000.0),
+    Param("max_excluded_fraction", 0.01, "share of the fluid mass that may be excluded (a particle whose density, "
+          "position or step is at fault leaves the flow and is counted) before the run fails; 0 = the first "
+          "fault fails it", LIVE, lo=0.0, hi=0.99),
     Param("end_time", 0.0, "simulated time the run stops at [s]; 0 = the scene's own", LIVE, lo=0.0, hi=1.0e5),
     Param("output_rate", 0.0, "outputs per simulated second [Hz]: /clock, probes, wrenches and particles; "
           "0 = the scene's own", LIVE, lo=0.0, hi=1.0e4),
@@ -80,8 +83,8 @@ DEFAULTS = {p.name: p.default for p in PARAMS}
 # numerics (Solver.reconfigure), the run's outputs (Run.set_output), the cloud (Run.set_cloud) or
 # the node's pacing. A LIVE parameter comes to the settings of the same name, except those below.
 LIVE_SETTINGS = {"kernel": "solver", "viscosity": "solver", "density_diffusion": "solver", "cfl": "solver",
-                 "c0": "solver", "end_time": "output", "output_rate": "output", "particle_rate": "output",
-                 "particle_fields": "cloud", "frame_id": "cloud", "real_time_factor": "pace"}
+                 "c0": "solver", "max_excluded_fraction": "solver", "end_time": "output", "output_rate": "output",
+                 "particle_rate": "output", "particle_fields": "cloud", "frame_id": "cloud", "real_time_factor": "pace"}
 _SETTINGS_OF = {"sps": ("viscosity",), "publish_particles": ("particle_rate",)}
 
 
@@ -154,7 +157,7 @@ def run_settings(values: dict):
     scene = load_scene(values["scene"])
     output = {k: values[k] for k in ("end_time", "output_rate") if values[k] > 0.0}
     numerics = {k: values[k] for k in ("dx", "kernel", "boundary", "density_diffusion", "precision", "device",
-                                       "cfl", "c0")}
+                                       "cfl", "c0", "max_excluded_fraction")}
     numerics["viscosity"] = "sps" if values["sps"] else values["viscosity"]
     reduction = {k: values[k] for k in ("model", "crop", "wall_planes")}
     # the node's clouds follow output_rate

@@ -362,6 +362,11 @@ class SimNode(LifecycleNode):
         level = {"failed": DiagnosticStatus.ERROR, "unconfigured": DiagnosticStatus.WARN,
                  "shut down": DiagnosticStatus.WARN}.get(state, DiagnosticStatus.OK)
         message = f"failed: {stats['error']}" if state == "failed" else state
+        if stats.get("excluded_particles") and level == DiagnosticStatus.OK:
+            # the run goes on without them, up to max_excluded_fraction of the fluid
+            level = DiagnosticStatus.WARN
+            message += (f"; {stats['excluded_particles']} fluid particles excluded "
+                        f"({stats['excluded_fraction']:.3%} of the fluid mass: {stats['excluded_by_reason']})")
         if self.internal_error:
             level, message = DiagnosticStatus.ERROR, f"{message}; {self.internal_error}"
             stats["internal_error"] = self.internal_error

@@ -120,6 +120,9 @@ class SolverConfig:
     # energy_growth: kinetic + potential + elastic energy of the fluid above its start by more than
     # energy_growth_ratio x M g H (M the fluid's mass, H = depth); nothing feeds a closed tank; 0 = off
     energy_growth_ratio: float = 0.05
+    # a fluid particle at fault (health.REASONS) is excluded and counted; the run fails once the
+    # excluded fluid passes this fraction of the fluid mass; 0 = a fault fails the run
+    max_excluded_fraction: float = 0.01
     # the tank's inside [wall_lo, wall_hi] (beyond +-1e30 where there is no wall: periodic axes, the
     # open top) and the solid boxes (lo, hi) fluid must stay out of; set by the scene builder
     wall_lo: tuple = (-1.0e30, -1.0e30, -1.0e30)
@@ -186,6 +189,9 @@ class SolverConfig:
             positive(name, strict=False)
         if self.mk_beta < 1.0:
             raise ConfigError("mk_beta", self.mk_beta, "a number >= 1 (boundary particles no sparser than fluid)")
+        f = self.max_excluded_fraction
+        if isinstance(f, bool) or not isinstance(f, (int, float)) or not 0.0 <= f < 1.0:
+            raise ConfigError("max_excluded_fraction", f, "a fraction of the fluid mass in [0, 1) (0 = strict)")
         if not MIN_CFL <= self.cfl <= 1.0:
             raise ConfigError("cfl", self.cfl, f"a number in [{MIN_CFL:g}, 1]")
         if 0.0 < self.dt_fixed < MIN_DT_FIXED:

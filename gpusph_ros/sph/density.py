@@ -20,6 +20,7 @@ from . import kernels, neighbours, state
 
 DENSITY_DIFFUSION_ID = {"none": 0, "delta": 1}
 FLUID = state.FLUID
+BOUNDARY = state.BOUNDARY
 
 
 @functools.lru_cache(maxsize=None)
@@ -54,7 +55,8 @@ def build(scalar):
         base = i * grid.max_neighbours
         for k in range(count[i]):
             j = nbr[base + k]
-            if ptype[j] == FLUID or with_boundary:
+            # the lists may still hold a particle excluded this step
+            if ptype[j] == FLUID or (with_boundary and ptype[j] == BOUNDARY):
                 wk = kernel_w(kernel, norm, inv_h, wp.length(separation(grid, pos[i], pos[j])))
                 num += mass[j] * wk
                 den += mass[j] / rho[j] * wk

@@ -3,17 +3,32 @@
 Each check has a named slot in the ``fail`` array (the id of the first particle that failed it, or
 NO_FAILURE); a state with any slot set is never committed.
 
+Faults of one particle (REASONS):
 - non_finite: NaN or infinity in a position, velocity or density;
 - outside_domain: a fluid particle left the domain (the tank, its walls and headroom);
 - density_bounds: a density outside [rho_min, rho_max] (0.8 and 1.25 rho0 by default);
 - wall_penetration: a fluid particle more than ``penetration_ratio`` dx beyond a wall face of the
   tank, or as deep inside a solid box: the boundary let it through;
+- displacement: a fluid particle moved more than 0.9 of the kernel support 2h in one step (as
+  DualSPHysics' CODE_OUTMOV, MovLimit = 0.9 of its 2h cell): its neighbour list no longer holds
+  the particles it met.
+
+A fluid particle at fault is excluded, as DualSPHysics excludes and counts its CODE_OUTRHO /
+OUTPOS / OUTMOV particles: it keeps its id, last committed position and density, stops at rest
+and drops out of every neighbour list (ptype EXCLUDED); its mass and reason are counted. The run
+fails, with the state before that step kept, only once the excluded fluid passes
+``max_excluded_fraction`` of the fluid mass (excluded_fraction); with max_excluded_fraction 0 a
+particle's fault fails the run under its own name, as a fault of a boundary particle always does
+(a wall cannot lose particles).
+
+Faults of the whole state:
 - clumping: more than ``clump_fraction`` of the fluid particles have a fluid neighbour closer
   than ``clump_ratio`` dx, marked in the force pass (the tensile and pairing instabilities pair
   particles long before anything is infinite; a few pairs in a splash are no failure);
 - energy_growth: the fluid's kinetic + potential + elastic energy (eos.elastic_energy) more than
   ``energy_growth_ratio`` M g H above its value at the start: in a closed tank with no inflow
-  every term of the scheme conserves or dissipates it, so growth is the integrator going unstable.
+  every term of the scheme conserves or dissipates it, so growth is the integrator going unstable;
+- excluded_fraction: the excluded fluid would pass ``max_excluded_fraction`` of the fluid mass.
 """
 
 import functools
@@ -24,13 +39,19 @@ import warp as wp
 from . import eos, state
 
 FLUID = state.FLUID
+BOUNDARY = state.BOUNDARY
 
 # the checks, in the order they are reported; each name's index is its slot in ``fail``
-CHECKS = ("non_finite", "outside_domain", "density_bounds", "wall_penetration", "clumping", "energy_growth")
-NON_FINITE, OUTSIDE_DOMAIN, DENSITY_BOUNDS, WALL_PENETRATION, CLUMPING, ENERGY_GROWTH = range(len(CHECKS))
+CHECKS = ("non_finite", "outside_domain", "density_bounds", "wall_penetration", "displacement", "clumping",
+          "energy_growth", "excluded_fraction")
+(NON_FINITE, OUTSIDE_DOMAIN, DENSITY_BOUNDS, WALL_PENETRATION, DISPLACEMENT, CLUMPING, ENERGY_GROWTH,
+ EXCLUDED_FRACTION) = range(len(CHECKS))
 N_CHECKS = len(CHECKS)
+# the faults of one particle, which exclude a fluid particle; their index is their slot in ``fail``
+REASONS = CHECKS[:DISPLACEMENT + 1]
+N_REASONS = len(REASONS)
 # checks of the whole state, not of one particle
-GLOBAL_CHECKS = ("energy_growth",)
+GLOBAL_CHECKS = ("energy_growth", "excluded_fraction")
 NO_FAILURE = 2 ** 31 - 1
 NO_ENERGY = 1.0e300  # the energy check's "no reference yet"
 
@@ -61,25 +82,23 @@ def build(scalar):
                 bad = 1
         return bad == 0
 
-    @wp.kernel(enable_backward=False, module="unique")
-    def check_particles(p: Params, pos: wp.array(dtype=vec), vel: wp.array(dtype=vec), rho: wp.array(dtype=scalar),
-                        ptype: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32),
-                        solid_lo: wp.array(dtype=vec), solid_hi: wp.array(dtype=vec), fail: wp.array(dtype=wp.int32)):
-        """Flags each check a particle of the candidate state fails, by the caller's particle id
-        (the slots are re-sorted by later steps of the batch)."""
-        i = wp.tid()
-        pid = ids[i]
-        x = pos[i]
-        r = rho[i]
-        if wp.isnan(x) or wp.isinf(x) or wp.isnan(vel[i]) or wp.isinf(vel[i]) or wp.isnan(r) or wp.isinf(r):
-            wp.atomic_min(fail, NON_FINITE, pid)
-            return
-        if ptype[i] == FLUID:
+    @wp.func
+    def fault(p: Params, x: vec, x_before: vec, u: vec, r: scalar, t: int, solid_lo: wp.array(dtype=vec),
+              solid_hi: wp.array(dtype=vec)) -> int:
+        """The first of REASONS a particle of the candidate state fails (x_before its committed
+        position), or -1."""
+        if wp.isnan(x) or wp.isinf(x) or wp.isnan(u) or wp.isinf(u) or wp.isnan(r) or wp.isinf(r):
+            return NON_FINITE
+        reason = int(-1)
+        if t == FLUID:
             for ax in range(3):
-                if x[ax] < p.lo[ax] or x[ax] > p.hi[ax]:
-                    wp.atomic_min(fail, OUTSIDE_DOMAIN, pid)
-                if x[ax] < p.wall_lo[ax] - p.penetration or x[ax] > p.wall_hi[ax] + p.penetration:
-                    wp.atomic_min(fail, WALL_PENETRATION, pid)
+                if reason < 0 and (x[ax] < p.lo[ax] or x[ax] > p.hi[ax]):
+                    reason = OUTSIDE_DOMAIN
+            if reason < 0 and (r < p.rho_min or r > p.rho_max):
+                reason = DENSITY_BOUNDS
+            for ax in range(3):
+                if reason < 0 and (x[ax] < p.wall_lo[ax] - p.penetration or x[ax] > p.wall_hi[ax] + p.penetration):
+                    reason = WALL_PENETRATION
             for k in range(p.n_solids):
                 lo = solid_lo[k]
                 hi = solid_hi[k]
@@ -87,10 +106,64 @@ def build(scalar):
                 for ax in range(p.dim):
                     if x[ax] <= lo[ax] + p.penetration or x[ax] >= hi[ax] - p.penetration:
                         outside = 1
-                if outside == 0:
-                    wp.atomic_min(fail, WALL_PENETRATION, pid)
-        if r < p.rho_min or r > p.rho_max:
-            wp.atomic_min(fail, DENSITY_BOUNDS, pid)
+                if reason < 0 and outside == 0:
+                    reason = WALL_PENETRATION
+            d = x - x_before
+            for ax in range(3):
+                if p.periodic[ax] != 0:  # a particle that wrapped moved by the minimum image
+                    span = p.hi[ax] - p.lo[ax]
+                    d[ax] = d[ax] - span * wp.round(d[ax] / span)
+            if reason < 0 and wp.dot(d, d) > p.move_limit2:
+                reason = DISPLACEMENT
+        elif r < p.rho_min or r > p.rho_max:
+            reason = DENSITY_BOUNDS
+        return reason
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def check_particles(p: Params, pos: wp.array(dtype=vec), pos_c: wp.array(dtype=vec), vel_c: wp.array(dtype=vec),
+                        rho_c: wp.array(dtype=scalar), mass: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
+                        ids: wp.array(dtype=wp.int32), solid_lo: wp.array(dtype=vec), solid_hi: wp.array(dtype=vec),
+                        fail: wp.array(dtype=wp.int32), faulty: wp.array(dtype=wp.int32),
+                        pending: wp.array(dtype=wp.int32), pending_mass: wp.array(dtype=wp.float64)):
+        """Checks each particle of the candidate state (pos_c, vel_c, rho_c). A fluid particle at
+        fault, when exclusion is on, is marked in ``faulty`` for commit to exclude and counted in
+        ``pending`` (by reason) and ``pending_mass``; any other fault flags its slot in ``fail``
+        with the caller's particle id (the slots are re-sorted by later steps of the batch)."""
+        i = wp.tid()
+        t = ptype[i]
+        if t != FLUID and t != BOUNDARY:
+            return  # already excluded
+        reason = fault(p, pos_c[i], pos[i], vel_c[i], rho_c[i], t, solid_lo, solid_hi)
+        if reason < 0:
+            return
+        if t == FLUID and p.exclude != 0:
+            faulty[i] = 1
+            wp.atomic_add(pending, reason, 1)
+            wp.atomic_add(pending_mass, 0, wp.float64(mass[i]))
+        else:
+            wp.atomic_min(fail, reason, ids[i])
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def exclusion_check(p: Params, clock: wp.array(dtype=wp.float64), pending: wp.array(dtype=wp.int32),
+                        pending_mass: wp.array(dtype=wp.float64), excluded: wp.array(dtype=wp.int32),
+                        excluded_mass: wp.array(dtype=wp.float64), fail: wp.array(dtype=wp.int32)):
+        """After every other check of the candidate: flags excluded_fraction when the excluded
+        fluid would pass the limit; else, if the candidate is to be committed, adds this step's
+        exclusions to the run's (excluded_mass = [mass, time of the first exclusion or -1]).
+        A failed step's exclusions stay pending for the report."""
+        if pending_mass[0] <= wp.float64(0.0):
+            return
+        if excluded_mass[0] + pending_mass[0] > p.excluded_limit:
+            fail[EXCLUDED_FRACTION] = 0
+        if not healthy(fail):
+            return
+        if excluded_mass[1] < wp.float64(0.0):
+            excluded_mass[1] = clock[0] + clock[1]
+        excluded_mass[0] = excluded_mass[0] + pending_mass[0]
+        pending_mass[0] = wp.float64(0.0)
+        for k in range(N_REASONS):
+            excluded[k] = excluded[k] + pending[k]
+            pending[k] = 0
 
     @wp.kernel(enable_backward=False, module="unique")
     def census(p: Params, pos: wp.array(dtype=vec), vel: wp.array(dtype=vec), rho: wp.array(dtype=scalar),
@@ -127,4 +200,5 @@ def build(scalar):
         count[0] = 0  # ready for the next census
         count[1] = NO_FAILURE
 
-    return SimpleNamespace(healthy=healthy, check_particles=check_particles, census=census, census_check=census_check)
+    return SimpleNamespace(healthy=healthy, check_particles=check_particles, exclusion_check=exclusion_check,
+                           census=census, census_check=census_check)

@@ -18,6 +18,7 @@ import numpy as np
 import warp as wp
 
 from .config import LIST_SKIN
+from .state import BOUNDARY, FLUID
 
 
 class NeighbourOverflow(RuntimeError):
@@ -150,7 +151,7 @@ def build(scalar):
         if needs_list[i] == 0:
             count[i] = 0
             return
-        fluid_i = ptype_sorted[ki] == 0
+        fluid_i = ptype_sorted[ki] == FLUID
         xi = pos_sorted[ki]
         ci = cell_coord(grid, xi)
         n = int(0)
@@ -161,8 +162,10 @@ def build(scalar):
                     cell = neighbour_cell(grid, ci, dx, dy, dz)
                     if cell >= 0:
                         for k in range(start[cell], end[cell]):
-                            # a boundary particle needs only its fluid neighbours
-                            if k != ki and (fluid_i or ptype_sorted[k] == 0):
+                            # a boundary particle needs only its fluid neighbours; an
+                            # excluded particle is nobody's neighbour
+                            t_k = ptype_sorted[k]
+                            if k != ki and (t_k == FLUID or (fluid_i and t_k == BOUNDARY)):
                                 r = separation(grid, xi, pos_sorted[k])
                                 if wp.dot(r, r) < grid.radius2:
                                     if n < grid.max_neighbours:

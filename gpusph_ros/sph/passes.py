@@ -9,7 +9,8 @@ Step (predictor-corrector as GPUSPH, Herault et al. 2010):
   neighbours(x_n) -> eos -> [sps] -> interact(n) -> choose_dt
   -> integrate(dt/2) -> eos -> [sps] -> interact(n+1/2) -> integrate(dt) into the candidate state
   -> health.check_particles(candidate) -> [health.census(candidate) -> health.census_check, every few
-  steps] -> commit (only if healthy) -> tick -> [shepard every N steps]
+  steps] -> health.exclusion_check -> commit (only if healthy; excluding faulty fluid particles)
+  -> tick -> [shepard every N steps]
 The committed state is never overwritten by a candidate that failed a health check.
 """
 
@@ -22,6 +23,7 @@ from . import boundaries, density, eos, health, kernels, momentum, neighbours, s
 
 FLUID = state.FLUID
 BOUNDARY = state.BOUNDARY
+EXCLUDED = state.EXCLUDED
 DYNAMIC = boundaries.BOUNDARY_ID["dynamic"]
 LENNARD_JONES = boundaries.BOUNDARY_ID["lennard_jones"]
 ARTIFICIAL = viscosity.VISCOSITY_ID["artificial"]
@@ -268,14 +270,25 @@ def _time_passes(scalar):
         vel_out[i] = u
 
     @wp.kernel(enable_backward=False, module="unique")
-    def commit(fail: wp.array(dtype=wp.int32), pos_new: wp.array(dtype=vec), vel_new: wp.array(dtype=vec),
-               rho_new: wp.array(dtype=scalar), pos: wp.array(dtype=vec), vel: wp.array(dtype=vec),
-               rho: wp.array(dtype=scalar)):
+    def commit(fail: wp.array(dtype=wp.int32), faulty: wp.array(dtype=wp.int32), pos_new: wp.array(dtype=vec),
+               vel_new: wp.array(dtype=vec), rho_new: wp.array(dtype=scalar), pos: wp.array(dtype=vec),
+               vel: wp.array(dtype=vec), rho: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
+               needs_list: wp.array(dtype=wp.int32), stale: wp.array(dtype=wp.int32)):
+        """The candidate becomes the state, if healthy; a particle marked faulty is excluded instead
+        (health.py): it keeps its committed position and density, at rest, and the lists are
+        rebuilt without it."""
         i = wp.tid()
         if healthy(fail):
-            pos[i] = pos_new[i]
-            vel[i] = vel_new[i]
-            rho[i] = rho_new[i]
+            if faulty[i] != 0:
+                ptype[i] = EXCLUDED
+                needs_list[i] = 0
+                vel[i] = vec(scalar(0.0))
+                stale[0] = 1
+            else:
+                pos[i] = pos_new[i]
+                vel[i] = vel_new[i]
+                rho[i] = rho_new[i]
+        faulty[i] = 0
 
     @wp.kernel(enable_backward=False, module="unique")
     def permute(order: wp.array(dtype=wp.int32), pos: wp.array(dtype=vec), vel: wp.array(dtype=vec),
@@ -314,5 +327,6 @@ def _time_passes(scalar):
 def build(scalar):
     """Every pass of a step for one floating-point type, by name, with the structs they read."""
     S, H = state.build(scalar), health.build(scalar)
-    return SimpleNamespace(Params=S.Params, Fields=S.Fields, check_particles=H.check_particles, census=H.census,
+    return SimpleNamespace(Params=S.Params, Fields=S.Fields, check_particles=H.check_particles,
+                           exclusion_check=H.exclusion_check, census=H.census,
                            census_check=H.census_check, **vars(_force_passes(scalar)), **vars(_time_passes(scalar)))

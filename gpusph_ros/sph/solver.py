@@ -17,7 +17,7 @@ from .config import SolverConfig, check_device
 from .health import HealthError
 from .launch import Launcher
 from .neighbours import NeighbourList, NeighbourOverflow
-from .state import FLUID
+from .state import EXCLUDED, FLUID
 
 _MAX_BATCH = 64  # steps launched between two reads of the clock
 # steps between two sorts of the particle arrays into cell order: neighbours then sit next to each
@@ -91,6 +91,7 @@ class Solver:
                                         self.launch)
         self._launched = 0
         self.time, self.dt, self.dt_stable, self.steps = 0.0, 0.0, 0.0, 0
+        self._excluded_host = (np.zeros(health.N_REASONS, dtype=np.int32), np.array([0.0, -1.0]))
 
     # -- set-up -------------------------------------------------------------------------
     def _make_params(self):
@@ -139,6 +140,9 @@ class Solver:
         # the energy check's slack: a fraction of M g H
         self._energy_slack = cfg.energy_growth_ratio * self._fluid_mass * cfg.g_norm * cfg.depth
         p.energy_slack = self._energy_slack
+        p.move_limit2 = (0.9 * 2.0 * cfg.h) ** 2
+        p.exclude = 1 if cfg.max_excluded_fraction > 0.0 else 0
+        p.excluded_limit = cfg.max_excluded_fraction * self._fluid_mass
         return p
 
     def _allocate(self, particles: Particles):
@@ -185,6 +189,13 @@ class Solver:
         self._energy_sum = arr(np.array([0.0, health.NO_ENERGY, 0.0]), wp.float64)
         self._clumped = wp.zeros(n, dtype=wp.int32, device=dev)
         self._clump_count = arr(np.array([0, health.NO_FAILURE], dtype=np.int32), wp.int32)
+        # exclusions (health.py): fluid particles at fault in the candidate, their count by reason and
+        # mass until the step commits; the run's counts, and [mass, time of the first or -1]
+        self._faulty = wp.zeros(n, dtype=wp.int32, device=dev)
+        self._pending = wp.zeros(health.N_REASONS, dtype=wp.int32, device=dev)
+        self._pending_mass = wp.zeros(1, dtype=wp.float64, device=dev)
+        self._excluded = wp.zeros(health.N_REASONS, dtype=wp.int32, device=dev)
+        self._excluded_mass = arr(np.array([0.0, -1.0]), wp.float64)
         self._clock = wp.zeros(4, dtype=wp.float64, device=dev)  # t, dt, stable dt, time of a failed step
         self._steps = arr(np.array([0, -1], dtype=np.int32), wp.int32)  # steps, failed step
         wp.launch(self._passes.equation_of_state, dim=n, inputs=[self.params, self._fields], device=dev)
@@ -228,8 +239,10 @@ class Solver:
         wp.launch(k.integrate, dim=n,
                   inputs=[p, self._clock, 1.0, self.pos, self.vel, self.rho, self.ptype, self._vel_h, self.acc,
                           self._drho, self._xsph, self._pos_c, self._vel_c, self._rho_c], device=dev)
-        wp.launch(k.check_particles, dim=n, inputs=[p, self._pos_c, self._vel_c, self._rho_c, self.ptype, self.ids,
-                                                    self._solid_lo, self._solid_hi, self._fail], device=dev)
+        wp.launch(k.check_particles, dim=n,
+                  inputs=[p, self.pos, self._pos_c, self._vel_c, self._rho_c, self.mass, self.ptype, self.ids,
+                          self._solid_lo, self._solid_hi, self._fail, self._faulty, self._pending,
+                          self._pending_mass], device=dev)
         if self._launched % _CENSUS_EVERY == 0:
             self._energy_sum[0:1].zero_()
             wp.launch(k.census, dim=n, inputs=[p, self._pos_c, self._vel_c, self._rho_c, self.mass, self.ptype,
@@ -237,8 +250,11 @@ class Solver:
                       device=dev)
             wp.launch(k.census_check, dim=1, inputs=[p, self._energy_sum, self._clump_count, self._fail],
                       device=dev)
-        wp.launch(k.commit, dim=n, inputs=[self._fail, self._pos_c, self._vel_c, self._rho_c, self.pos,
-                                           self.vel, self.rho], device=dev)
+        wp.launch(k.exclusion_check, dim=1, inputs=[p, self._clock, self._pending, self._pending_mass,
+                                                    self._excluded, self._excluded_mass, self._fail], device=dev)
+        wp.launch(k.commit, dim=n, inputs=[self._fail, self._faulty, self._pos_c, self._vel_c, self._rho_c, self.pos,
+                                           self.vel, self.rho, self.ptype, self._needs_list, self.neighbours.stale],
+                  device=dev)
         wp.launch(k.tick, dim=1, inputs=[self._fail, self._clock, self._steps], device=dev)
         self.neighbours.moved(self.pos)
         self._launched += 1
@@ -261,9 +277,17 @@ class Solver:
         fail = self._fail.numpy()
         self.time, self.dt, self.dt_stable = float(clock[0]), float(clock[1]), float(clock[2])
         self.steps = int(steps[0])
+        self._excluded_host = (self._excluded.numpy(), self._excluded_mass.numpy())
         for check, idx in zip(health.CHECKS, fail):
             if idx == health.NO_FAILURE:
                 continue
+            if check == "excluded_fraction":
+                counts = self._excluded_host[0] + self._pending.numpy()
+                mass = self._excluded_host[1][0] + float(self._pending_mass.numpy()[0])
+                raise HealthError(check, int(steps[1]), float(clock[3]), -1,
+                                  f"{mass / self._fluid_mass:.2%} of the fluid mass would be excluded "
+                                  f"({self.describe_excluded(counts)}), more than max_excluded_fraction "
+                                  f"{self.config.max_excluded_fraction:.2%}")
             if check in health.GLOBAL_CHECKS:
                 e = self._energy_sum.numpy()
                 raise HealthError(check, int(steps[1]), float(clock[3]), -1,
@@ -279,6 +303,37 @@ class Solver:
             raise NeighbourOverflow(f"a particle has {overflow} neighbours, more than the list's "
                                     f"{self.neighbours.max_neighbours}: particles have clumped, or raise "
                                     f"max_neighbours")
+
+    @property
+    def excluded(self) -> dict:
+        """Fluid particles excluded so far, by reason (health.REASONS), as of the last sync."""
+        return {reason: int(c) for reason, c in zip(health.REASONS, self._excluded_host[0])}
+
+    @property
+    def excluded_particles(self) -> int:
+        return int(self._excluded_host[0].sum())
+
+    @property
+    def excluded_fraction(self) -> float:
+        """The excluded fluid's share of the fluid mass."""
+        return float(self._excluded_host[1][0]) / self._fluid_mass if self._fluid_mass > 0.0 else 0.0
+
+    @property
+    def first_excluded_time(self) -> "float | None":
+        """Simulated time of the step that excluded the first particle; None before any."""
+        t = float(self._excluded_host[1][1])
+        return None if t < 0.0 else t
+
+    @staticmethod
+    def describe_excluded(counts) -> str:
+        """'density_bounds 3, wall_penetration 1' from counts by reason; 'none' when all are 0."""
+        return ", ".join(f"{r} {int(c)}" for r, c in zip(health.REASONS, counts) if c) or "none"
+
+    def kept(self) -> np.ndarray:
+        """Which particles, in the caller's order, are still in the flow (not excluded)."""
+        keep = np.empty(self.n, dtype=bool)
+        keep[self.ids.numpy()] = self.ptype.numpy() != EXCLUDED
+        return keep
 
     def reached(self, t_target: float) -> bool:
         """Whether the simulated time has reached ``t_target`` (to rounding)."""
@@ -330,6 +385,8 @@ class Solver:
     def clear_failure(self):
         """Forget a reported failure so the run can go on (e.g. after changing dt_fixed)."""
         self._fail.assign(np.full(health.N_CHECKS, health.NO_FAILURE, dtype=np.int32))
+        self._pending.zero_()
+        self._pending_mass.zero_()
         self._steps.assign(np.array([self._steps.numpy()[0], -1], dtype=np.int32))
         self.neighbours.overflow.zero_()
 

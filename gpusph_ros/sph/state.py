@@ -8,6 +8,7 @@ import warp as wp
 
 FLUID = 0
 BOUNDARY = 1
+EXCLUDED = 2  # a fluid particle taken out of the flow by a fault (health.py): no pass reads it
 
 
 @functools.lru_cache(maxsize=None)
@@ -58,6 +59,9 @@ def build(scalar):
         clump_fraction: wp.float64
         n_fluid: int
         energy_slack: wp.float64  # energy_growth_ratio M g H; 0 = off
+        move_limit2: scalar  # (0.9 x 2h)^2: the displacement check's limit, squared
+        exclude: int  # 1: a fluid particle at fault is excluded; 0: it fails the run
+        excluded_limit: wp.float64  # max_excluded_fraction x the fluid mass [kg]
 
     @wp.struct
     class Fields:
