@@ -96,3 +96,67 @@ def test_dambreak2_report_from_a_recorded_synthetic_bore(tmp_path, reference_dat
     assert values["profile_A"]["value"] == pytest.approx(0.9 + heights[0], rel=0.01)
     assert values["profile_A"]["experiment"] == 0.94
     assert "normalised velocity at point F" in table(report)
+
+
+def test_first_impact_integral_of_a_known_pulse():
+    t = np.linspace(0.0, 3.0, 3001)
+    p = np.where((t > 1.0) & (t < 1.5), 2.0, 0.0)  # starts past 0.25 at t = 1.001
+    start, impulse = M.first_impact(t, p, length=0.75)
+    assert start == pytest.approx(1.001) and impulse == pytest.approx(2.0 * 0.499, rel=0.01)
+    assert np.isnan(M.first_impact(t, p, start=5.0)[0])  # never reached
+    assert np.isnan(M.first_impact(t[:1300], p[:1300])[1])  # the record ends within the impact
+
+
+def record_synthetic_lobovsky(path, reference_data, scale):
+    """A recording of the lobovsky_2d scene's topics at 1 kHz whose wall pressures are ``scale`` x
+    the measured event and whose water levels are the measured ones."""
+    from gpusph_ros.analysis.reference import lobovsky_levels, lobovsky_pressures
+    from gpusph_ros.output.messages import clock, measurement_messages
+    from gpusph_ros.output.recording import BagRecorder
+    from gpusph_ros.scenes.schema import load_scene
+
+    scene = load_scene("lobovsky_2d")
+    t_unit, p_unit = np.sqrt(9.81 / 0.3), 1000.0 * 9.81 * 0.3
+    pressures, levels = lobovsky_pressures(reference_data), lobovsky_levels(reference_data)
+    rec = BagRecorder(path, {"scene_name": scene.name, "scene": scene.text, "dx": 0.005, "kernel": "wendland",
+                             "viscosity": "artificial", "run_config": "{dx: 0.005, rho0: 1000.0}"})
+    times = np.arange(0.0, 1.3, 0.001)
+    for t in times:
+        ts = t * t_unit
+        points = {f"sensor_{k}": {"vel": (0.0, 0.0, 0.0), "pressure": scale * p_unit * np.interp(ts, *pressures[k])}
+                  for k in (1, 2, 3, 4)}
+        gauges = {g: 0.3 * float(np.interp(ts, *levels[g])) for g in ("H1", "H2", "H3", "H4")}
+        rec.write("/clock", clock(t), t)
+        sample = {"points": points, "columns": {}, "profiles": {}, "gauges": gauges, "wrenches": {}, "blocks": {}}
+        for topic, msg in measurement_messages(t, sample, scene):
+            rec.write(topic, msg, t)
+    rec.close({"status": "completed", "excluded_particles": 0})
+    return times * t_unit, pressures
+
+
+@pytest.mark.parametrize("scale", [1.0, 1.2])
+def test_lobovsky_report_of_the_measured_series_scaled(tmp_path, reference_data, scale):
+    """Peak, its time, the first-impact integral and the RMS error of each sensor, the RMS error of
+    each gauge (Lobovsky et al. 2014): a run that reproduced the measurement, or 1.2 x it."""
+    from gpusph_ros.analysis.report import analyse, charts, table
+
+    ts, measured = record_synthetic_lobovsky(tmp_path / "bag", reference_data, scale)
+    report, curves = analyse(tmp_path / "bag", reference_data)
+    m = {row["key"]: row for row in report["metrics"]}
+    for k in (1, 2, 3, 4):
+        t_exp, p_exp = measured[k]
+        sampled = np.interp(ts, t_exp, p_exp)
+        peak = m[f"peak_sensor_{k}"]
+        assert peak["experiment"] == pytest.approx(p_exp.max())
+        assert peak["value"] == pytest.approx(scale * sampled[ts <= t_exp[-1]].max(), rel=1e-5)
+        assert m[f"t_peak_sensor_{k}"]["experiment"] == pytest.approx(t_exp[np.argmax(p_exp)])
+        # 1 kHz against 20 kHz: the integral holds to 1.5%, the spiky series' RMS to 5% of its peak
+        assert m[f"impulse_sensor_{k}"]["error_pct"] == pytest.approx((scale - 1.0) * 100.0, abs=1.5)
+        if scale == 1.0:
+            assert m[f"rms_sensor_{k}"]["value"] < 0.05 * p_exp.max()
+    for gauge in ("H1", "H2", "H3", "H4"):
+        assert m[f"rms_{gauge}"]["value"] < 0.005  # of H
+    text = table(report)
+    assert "first-impact pressure-time integral, sensor 1, 3 mm" in text and "no particle excluded" in text
+    assert {p.rsplit("/", 1)[-1] for p in charts(report, curves, tmp_path / "charts")} >= {"pressure.png",
+                                                                                          "levels.png"}

@@ -8,11 +8,18 @@
 - forward_return: max forward and max return velocity and their time difference (4.2.3, point D).
 - bore_arrival: the time of greatest acceleration (4.3.1), and mean_behind: the mean over the 6 s
   behind it (3.3).
+- first_impact: when a wall-pressure series' first impact starts and its pressure-time integral
+  (Lobovsky et al. 2014; not in the thesis).
 """
 import numpy as np
 
 THESIS_WINDOW = 0.04  # [s] moving average (thesis 4.2.1)
 BORE_WINDOW = 6.0  # [s] mean behind the bore (thesis 3.3)
+# a first impact on the wall starts when p / (rho g H) first passes IMPACT_START and lasts
+# IMPACT_LENGTH in t sqrt(g/H): Lobovsky's sensors at 3-30 mm rise, peak and fall back to the
+# quasi-static plateau (~0.6 rho g H) within 0.75 of it
+IMPACT_START = 0.25
+IMPACT_LENGTH = 0.75
 
 
 def moving_average(t, y, window: float = THESIS_WINDOW):
@@ -74,3 +81,17 @@ def mean_behind(t, u, start: float, window: float = BORE_WINDOW):
     if not inside.any():
         return float("nan"), 0.0
     return float(np.mean(u[inside])), float(t[inside][-1] - start)
+
+
+def first_impact(t, p, start: float = IMPACT_START, length: float = IMPACT_LENGTH):
+    """(start time, pressure-time integral over ``length`` from it) of the first impact in ``p``
+    (trapezoids; both in the series' own units, e.g. t sqrt(g/H) and p / (rho g H)); NaNs when
+    ``p`` never reaches ``start`` or the series ends within the impact."""
+    t, p = np.asarray(t, dtype=np.float64), np.asarray(p, dtype=np.float64)
+    above = np.flatnonzero(p > start)
+    if not len(above) or t[-1] < t[above[0]] + length:
+        return float("nan"), float("nan")
+    t0 = float(t[above[0]])
+    inside = (t >= t0) & (t <= t0 + length)
+    ti, pi = t[inside], p[inside]
+    return t0, float(np.sum(0.5 * (pi[1:] + pi[:-1]) * np.diff(ti)))  # np.trapz is gone from numpy 2

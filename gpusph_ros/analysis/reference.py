@@ -97,3 +97,40 @@ def gpusph_series(data, table: str, column: str, scenario: int):
         return np.array([]), np.array([])
     rows = [r for r in _rows(data, table) if int(r["scenario"]) == scenario]
     return np.array([float(r["dx_m"]) for r in rows]), np.array([float(r[column]) for r in rows])
+
+
+LOBOVSKY = Path("lobovsky_2014_dambreak")
+
+
+def lobovsky_pressures(data):
+    """Lobovsky et al. (2014)'s measured impact event ("peak event 5") by sensor, as the header of
+    each file names it ('sensor 1' ... 'sensor 4'; the off-centre 'sensor 2L' is left out, it has no
+    probe): {1: (t sqrt(g/H), p / (rho g H)), ...}. None without data."""
+    if data is None:
+        return None
+    out = {}
+    for path in sorted((data / LOBOVSKY / "pressure").glob("*.dat")):
+        with open(path) as f:
+            name = f.readline().lstrip("#").strip()
+        number = name.removeprefix("sensor ")
+        if number.isdigit():
+            d = np.loadtxt(path, comments="#")
+            out[int(number)] = (d[:, 0], d[:, 1])
+    return out
+
+
+def lobovsky_levels(data):
+    """The measured water levels by gauge, the mean of the repeats a gauge has (ETSIN 01 and 02):
+    {'H1': (t sqrt(g/H), h / H), ...}. None without data."""
+    if data is None:
+        return None
+    series = {}
+    for path in sorted((data / LOBOVSKY / "waterLevel").glob("Fig16_WaterLevels_H*_*.dat")):
+        gauge = path.stem.split("_")[2]
+        d = np.loadtxt(path, comments="#")
+        series.setdefault(gauge, []).append(d)
+    out = {}
+    for gauge, repeats in series.items():
+        t = repeats[0][:, 0]
+        out[gauge] = (t, np.mean([np.interp(t, r[:, 0], r[:, 1]) for r in repeats], axis=0))
+    return out

@@ -9,7 +9,10 @@ forward and return velocity at point D and the time between them. All series get
 moving average; velocity and force are shifted so their peaks meet the experiment's (the
 thesis's alignment), point D is not. DamBreak 2 (dambreak2_*; thesis 4.3): bore arrival (greatest
 acceleration), the mean depth-averaged velocity over 6 s behind the bore, and the profile
-normalised by it.
+normalised by it. Lobovsky et al. 2014 (lobovsky_*): per wall sensor the peak pressure, its time,
+the pressure-time integral of the first impact (metrics.first_impact) and the RMS error of the
+series against the measured event; per water-level gauge the RMS error of the level; all in
+the paper's units (p / (rho g H), h / H, t sqrt(g/H)), no time shift.
 """
 import json
 from pathlib import Path
@@ -39,7 +42,7 @@ def _metric(key, value, experiment=None, gpusph=None, note=""):
     label, unit = LABELS[key] if key in LABELS else (key, "")
     row = {"key": key, "label": label, "unit": unit, "value": value, "experiment": experiment, "gpusph": gpusph,
            "note": note}
-    if experiment is not None and value is not None and key.startswith(("peak", "mean", "profile")):
+    if experiment is not None and value is not None and key.startswith(("peak", "mean", "profile", "impulse")):
         row["error_pct"] = M.percent_error(value, experiment)
         if gpusph is not None:
             row["gpusph_error_pct"] = M.percent_error(gpusph, experiment)
@@ -130,6 +133,55 @@ def dambreak2(rec, meta, data, scenario, dx, upper):
     return out, curves
 
 
+def lobovsky(rec, scene, run, data):
+    """Lobovsky et al. (2014)'s measures: wall sensors 1-4 (probes sensor_1 ... sensor_4) and the
+    water-level gauges H1-H4 against the measured series."""
+    out, curves = [], {"pressure": {}, "levels": {}}
+    depth = float(scene.get("depth", 0.3))
+    g = float(np.linalg.norm(scene.get("gravity") or [0.0, 0.0, 9.81]))
+    rho0 = float(run.get("rho0", 1000.0))
+    t_unit, p_unit = np.sqrt(g / depth), rho0 * g * depth
+    exp_p = R.lobovsky_pressures(data) or {}
+    exp_h = R.lobovsky_levels(data) or {}
+    for k in (1, 2, 3, 4):
+        try:
+            s = rec.topic(f"probes/sensor_{k}/pressure")
+        except KeyError:
+            continue
+        t, p = s["t"] * t_unit, s["v"] / p_unit
+        exp = exp_p.get(k)
+        span = t <= exp[0][-1] if exp else np.ones(len(t), dtype=bool)  # the peak within the measured record
+        t_pk, p_pk = M.peak(t[span], p[span])
+        e_t_pk, e_pk = M.peak(*exp) if exp else (None, None)
+        start, impulse = M.first_impact(t, p)
+        e_start, e_impulse = M.first_impact(*exp) if exp else (None, None)
+        where = f"sensor {k}, {1000 * scene['probes'][f'sensor_{k}']['position'][-1]:g} mm"
+        rows = [_metric(f"peak_sensor_{k}", p_pk, e_pk), _metric(f"t_peak_sensor_{k}", t_pk, e_t_pk),
+                _metric(f"impulse_sensor_{k}", impulse, e_impulse,
+                        note=f"impact starts at {start:.3g}" + (f", measured {e_start:.3g}" if exp else "")),
+                _metric(f"rms_sensor_{k}", M.rms_error(t, p, *exp) if exp else None,
+                        note=f"of a measured peak {e_pk:.3g}" if exp else "")]
+        for row, (label, unit) in zip(rows, (("peak pressure", "p/(rho g H)"), ("time of the peak", "t sqrt(g/H)"),
+                                             ("first-impact pressure-time integral", "p t/(rho g H) sqrt(g/H)"),
+                                             ("RMS error of the pressure", "p/(rho g H)"))):
+            row["label"], row["unit"] = f"{label}, {where}", unit
+        out += rows
+        curves["pressure"][k] = (t, p, exp)
+    vertical = 1 if scene.get("dim") == 2 else 2
+    for gauge in ("H1", "H2", "H3", "H4"):
+        try:
+            s = rec.topic(f"probes/{gauge}")
+        except KeyError:
+            continue
+        t, h = s["t"] * t_unit, s["v"][:, vertical] / depth
+        exp = exp_h.get(gauge)
+        row = _metric(f"rms_{gauge}", M.rms_error(t, h, *exp) if exp else None)
+        row["label"], row["unit"] = f"RMS error of the water level at {gauge}", "h/H"
+        out.append(row)
+        curves["levels"][gauge] = (t, h, exp)
+    return out, {"lobovsky": curves}
+
+
 def analyse(path, data=None) -> dict:
     """Metrics of the recording at ``path`` (a bag directory) as a JSON-ready dict, plus curves.
     ``data``: the reference folder (default: the package's own, R.data_dir())."""
@@ -156,6 +208,8 @@ def analyse(path, data=None) -> dict:
     elif name.startswith("dambreak2"):
         rows, curves = dambreak2(rec, meta, data, scenario, dx, float(scene.get("depth", 0.1)))
         report["gpusph_case"] = f"DamBreak 2, {scene.get('depth')} m"
+    elif name.startswith("lobovsky"):
+        rows, curves = lobovsky(rec, scene, run, data)
     else:
         rows, curves = [], {}
     report["metrics"] = rows
@@ -290,6 +344,21 @@ def charts(report, curves, out_dir) -> list:
             ax.set(xlabel="u / depth-averaged u [-]", ylabel="height [m]", title="Velocity profile")
             ax.legend(fontsize=8)
             save(fig, "profile.png")
+    if "lobovsky" in curves:
+        for kind, what, unit in (("pressure", "wall pressure", "p / (rho g H)"), ("levels", "water level", "h / H")):
+            series = curves["lobovsky"][kind]
+            if not series:
+                continue
+            fig, axes = plt.subplots(len(series), 1, figsize=(7, 2.2 * len(series)), sharex=True, squeeze=False)
+            for ax, (name, (t, y, exp)) in zip(axes[:, 0], series.items()):
+                if exp:
+                    ax.plot(*exp, "k-", lw=0.6, label="Lobovsky et al. 2014 (measured)")
+                ax.plot(t, y, lw=0.9, label="this run")
+                ax.set(ylabel=unit, title=f"{what}, {'sensor ' if kind == 'pressure' else ''}{name}")
+            axes[0, 0].legend(fontsize=8)
+            axes[-1, 0].set(xlabel="t sqrt(g/H) [-]")
+            fig.suptitle(title, fontsize=9)
+            save(fig, f"{kind}.png")
     compared = [m for m in report["metrics"] if m.get("error_pct") is not None]
     if compared:
         fig, ax = plt.subplots(figsize=(7, 4))

@@ -3,10 +3,11 @@ coefficient of each combination of kernel x viscosity x boundary x density treat
 dam break, and how each failure showed itself.
 
 A run is stable when it reaches the end time with every health check quiet (``sph.health.CHECKS``:
-NaN, leaving the domain, density bounds, wall penetration, clumping, energy growth) and the
-neighbour lists never overflow. Each limit is found by bisection on a log scale between a
-stable and an unstable value (``search``), each probe a run from rest. The CFL search keeps the
-sound-speed coefficient at its default (c0 = 10 sqrt(g H)); the sound-speed search keeps CFL 0.3.
+NaN, leaving the domain, density bounds, wall penetration, a step's displacement, clumping, energy
+growth; strict: no particle excluded) and the neighbour lists never overflow. Each limit is found
+by bisection on a log scale between a stable and an unstable value (``search``), each probe a run
+from rest. The CFL search keeps the sound-speed coefficient at its default (c0 = 10 sqrt(g H));
+the sound-speed search keeps CFL 0.3.
 
 Boundaries: ``lennard_jones``, ``monaghan_kajtar`` and ``dynamic`` walls of boundary particles,
 ``planes`` particle-less walls (``scenes.reduce`` wall_planes). Density treatments: ``none``,
@@ -68,7 +69,9 @@ def trial(scene_name: str, settings: dict) -> str:
     from ..sph import HealthError, NeighbourOverflow, Solver
 
     scene = load_scene(scene_name)
-    config = resolve(scene, **settings)
+    # strict unless the settings say otherwise: a fault of one particle is a failure here, as when
+    # docs/stability was measured (before particles could be excluded)
+    config = resolve(scene, **{"max_excluded_fraction": 0.0, **settings})
     model = build_run(scene, config)
     solver = Solver(model.config, model.particles)
     try:
@@ -184,13 +187,15 @@ def table(rows) -> str:
 
 
 ABBREVIATIONS = {"non_finite": "N", "outside_domain": "O", "density_bounds": "D", "wall_penetration": "W",
-                 "clumping": "C", "energy_growth": "E", "neighbour_overflow": "L", "": ""}
+                 "displacement": "M", "clumping": "C", "energy_growth": "E", "excluded_fraction": "X",
+                 "neighbour_overflow": "L", "": ""}
 
 
 def chart(rows, path):
     """The stability map: rows kernel x viscosity, columns boundary x density; colour the limit,
-    letter the failure past it (N NaN, O out of domain, D density, W wall penetration, C clumping,
-    E energy growth, L neighbour-list overflow); grey and x where even the safe end fails."""
+    letter the failure past it (N NaN, O out of domain, D density, W wall penetration, M displacement,
+    C clumping, E energy growth, X excluded fraction, L neighbour-list overflow); grey and x where
+    even the safe end fails."""
     import matplotlib
 
     matplotlib.use("Agg")
