@@ -123,11 +123,11 @@ def record_synthetic_lobovsky(path, reference_data, scale):
     times = np.arange(0.0, 1.3, 0.001)
     for t in times:
         ts = t * t_unit
-        points = {f"sensor_{k}": {"vel": (0.0, 0.0, 0.0), "pressure": scale * p_unit * np.interp(ts, *pressures[k])}
-                  for k in (1, 2, 3, 4)}
+        sensors = {f"sensor_{k}": scale * p_unit * np.interp(ts, *pressures[k]) for k in (1, 2, 3, 4)}
         gauges = {g: 0.3 * float(np.interp(ts, *levels[g])) for g in ("H1", "H2", "H3", "H4")}
         rec.write("/clock", clock(t), t)
-        sample = {"points": points, "columns": {}, "profiles": {}, "gauges": gauges, "wrenches": {}, "blocks": {}}
+        sample = {"points": {}, "sensors": sensors, "columns": {}, "profiles": {}, "gauges": gauges, "wrenches": {},
+                  "blocks": {}}
         for topic, msg in measurement_messages(t, sample, scene):
             rec.write(topic, msg, t)
     rec.close({"status": "completed", "excluded_particles": 0})

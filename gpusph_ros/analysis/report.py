@@ -134,8 +134,8 @@ def dambreak2(rec, meta, data, scenario, dx, upper):
 
 
 def lobovsky(rec, scene, run, data):
-    """Lobovsky et al. (2014)'s measures: wall sensors 1-4 (probes sensor_1 ... sensor_4) and the
-    water-level gauges H1-H4 against the measured series."""
+    """Lobovsky et al. (2014)'s measures: wall sensors 1-4 (probes sensor_1 ... sensor_4,
+    pressure_sensor or point probes) and the water-level gauges H1-H4 against the measured series."""
     out, curves = [], {"pressure": {}, "levels": {}}
     depth = float(scene.get("depth", 0.3))
     g = float(np.linalg.norm(scene.get("gravity") or [0.0, 0.0, 9.81]))
@@ -144,8 +144,10 @@ def lobovsky(rec, scene, run, data):
     exp_p = R.lobovsky_pressures(data) or {}
     exp_h = R.lobovsky_levels(data) or {}
     for k in (1, 2, 3, 4):
-        try:
-            s = rec.topic(f"probes/sensor_{k}/pressure")
+        try:  # a pressure_sensor probe's reading, or a point probe's pressure (recordings before sensors)
+            s = rec.topic(f"probes/sensor_{k}")
+            if np.ndim(s["v"]) != 1:
+                s = rec.topic(f"probes/sensor_{k}/pressure")
         except KeyError:
             continue
         t, p = s["t"] * t_unit, s["v"] / p_unit

@@ -1,5 +1,5 @@
-"""Every measurement a scene asks for, taken together at an output step: point, profile and
-gauge probes (one interpolation launch for all their points), depth-averaged columns, the wrench
+"""Every measurement a scene asks for, taken together at an output step: point, profile, gauge
+and pressure-sensor probes (one interpolation launch for all their points), depth-averaged columns, the wrench
 on each obstacle and its pressure-block force. Computed on the solver's device; only the results
 come to the host."""
 import numpy as np
@@ -8,6 +8,7 @@ from .blocks import PressureBlockForce
 from .columns import ColumnMeans
 from .forces import BodyWrench
 from .probes import PointProbes
+from .sensors import sensor_points, wall_pressure
 from .surface import elevation, gauge_points
 
 
@@ -27,11 +28,14 @@ class Measurements:
                 pts[:, up] = probe.heights
             elif probe.type == "gauge":
                 pts = gauge_points(probe.position, scene.tank[up], cfg.dx, dim)
+            elif probe.type == "pressure_sensor":
+                pts = sensor_points(probe, cfg.h, cfg.dx, dim, scene.tank)
             else:
                 continue
             self._slices[probe.name] = (len(points), len(points) + len(pts), pts)
             points.extend(pts)
         self._points = PointProbes(solver, points) if points else None
+        self._wall = (cfg.h, cfg.rho0, cfg.gravity)
         columns = [p for p in scene.probes if p.type == "column"]
         self._column_names = [p.name for p in columns]
         self._columns = (ColumnMeans(solver, [p.position for p in columns], [p.radius_dx * cfg.dx for p in columns])
@@ -46,9 +50,10 @@ class Measurements:
 
     def sample(self) -> dict:
         """{"points": {name: {vel, pressure, rho}}, "profiles": {name: {heights, vel}},
-        "gauges": {name: elevation}, "columns": {name: {vel, count}},
+        "gauges": {name: elevation}, "sensors": {name: wall pressure}, "columns": {name: {vel, count}},
         "wrenches": {name: (force, torque)}, "blocks": {name: {offset: (fx, upstream, downstream)}}}."""
-        out = {"points": {}, "profiles": {}, "gauges": {}, "columns": {}, "wrenches": {}, "blocks": {}}
+        out = {"points": {}, "profiles": {}, "gauges": {}, "sensors": {}, "columns": {}, "wrenches": {},
+               "blocks": {}}
         up = self.scene.dim - 1
         if self._points is not None:
             values = self._points.sample()
@@ -60,6 +65,9 @@ class Measurements:
                     out["points"][probe.name] = {k: values[k][a] for k in ("vel", "pressure", "rho")}
                 elif probe.type == "profile":
                     out["profiles"][probe.name] = {"heights": pts[:, up], "vel": values["vel"][a:b]}
+                elif probe.type == "pressure_sensor":
+                    out["sensors"][probe.name] = wall_pressure(values["pressure"][a:b], values["weight"][a:b],
+                                                               probe.normal, *self._wall)
                 else:
                     out["gauges"][probe.name] = elevation(pts[:, up], values["weight"][a:b])
         if self._columns is not None:

@@ -94,7 +94,8 @@ def block_topic(offset: float) -> str:
 
 def measurement_messages(t: float, sample: dict, scene, namespace: str = "/sim_node", frame_id: str = "world"):
     """(topic, message) pairs for one measurement sample (``measure.suite.Measurements``):
-    velocity at point probes (Vector3Stamped) and their pressure (FluidPressure), depth-averaged
+    velocity at point probes (Vector3Stamped) and their pressure (FluidPressure), a wall pressure
+    sensor's reading (FluidPressure), depth-averaged
     velocity (Vector3Stamped), profile points (Vector3Stamped per height, h0, h1, ...), surface
     elevation (PointStamped at the gauge, z = elevation), the wrench on each body about its
     centre, and each body's pressure-block force (WrenchStamped, force.x only)."""
@@ -103,6 +104,8 @@ def measurement_messages(t: float, sample: dict, scene, namespace: str = "/sim_n
     for name, values in sample["points"].items():
         out.append((f"{probes}/{name}", vector(t, values["vel"], frame_id)))
         out.append((f"{probes}/{name}/pressure", pressure(t, values["pressure"], frame_id)))
+    for name, value in sample.get("sensors", {}).items():
+        out.append((f"{probes}/{name}", pressure(t, value, frame_id)))
     for name, values in sample["columns"].items():
         out.append((f"{probes}/{name}", vector(t, values["vel"], frame_id)))
     for name, values in sample["profiles"].items():

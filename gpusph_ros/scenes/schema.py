@@ -21,7 +21,7 @@ from ..sph.config import ConfigError
 from . import yaml_input
 from .boxes import WALL_KINDS, wall_faces
 
-PROBE_TYPES = ("point", "column", "profile", "gauge")
+PROBE_TYPES = ("point", "column", "profile", "gauge", "pressure_sensor")
 SCENE_KEYS = ("name", "description", "source", "dim", "tank", "headroom", "gravity", "depth", "periodic",
               "walls", "fluid", "wet_bed", "obstacles", "probes", "run")
 
@@ -51,13 +51,17 @@ class Probe:
     """A named gauge. ``point``: kernel-interpolated values at ``position``; ``column``: mean
     velocity of the fluid in a vertical column of radius ``radius_dx`` spacings around the
     horizontal ``position``; ``profile``: point values at ``heights`` above the floor there;
-    ``gauge``: free-surface elevation there. ``position`` is always stored as a 3-vector."""
+    ``gauge``: free-surface elevation there; ``pressure_sensor``: a transducer of ``diameter`` [m]
+    centred at ``position`` on a wall or body face whose inward (into the fluid) unit ``normal``
+    is given (measure.sensors). ``position`` and ``normal`` are always stored as 3-vectors."""
 
     name: str
     type: str
     position: tuple
     radius_dx: float = 3.0
     heights: tuple = ()
+    normal: tuple = ()
+    diameter: float = 0.0
 
 
 @dataclass
@@ -224,7 +228,7 @@ def _obstacles(items, tank, dim) -> list:
 
 
 def _probes(probes_in, tank, dim) -> list:
-    """Probes by name: point, column or profile, each inside the tank."""
+    """Probes by name (PROBE_TYPES), each inside the tank."""
     up = dim - 1
     probes = []
     if not isinstance(probes_in, dict):
@@ -232,11 +236,12 @@ def _probes(probes_in, tank, dim) -> list:
     for name, item in probes_in.items():
         where = f"probes.{name}"
         _name(where, name)
-        item = _mapping(where, item, ("type", "position", "radius_dx", "heights"), required=("type", "position"))
+        item = _mapping(where, item, ("type", "position", "radius_dx", "heights", "normal", "diameter"),
+                        required=("type", "position"))
         kind = item["type"]
         if kind not in PROBE_TYPES:
             raise ConfigError(f"{where}.type", kind, "one of " + ", ".join(PROBE_TYPES))
-        length = dim if kind == "point" else dim - 1
+        length = dim if kind in ("point", "pressure_sensor") else dim - 1
         position = _pad3(_vector(f"{where}.position", item["position"], length))
         _inside(f"{where}.position", position, tank, length)
         radius = _number(f"{where}.radius_dx", item.get("radius_dx", 3.0), lo=0.0, lo_open=True)
@@ -248,7 +253,21 @@ def _probes(probes_in, tank, dim) -> list:
             heights = tuple(_number(f"{where}.heights[{j}]", z, lo=0.0, hi=tank[up]) for j, z in enumerate(raw))
         elif "heights" in item:
             raise ConfigError(f"{where}.heights", item["heights"], "no heights: only profile probes take them")
-        probes.append(Probe(name, kind, position, radius, heights))
+        normal, diameter = (), 0.0
+        if kind == "pressure_sensor":
+            if "normal" not in item:
+                raise ConfigError(f"{where}.normal", None, f"the face's inward normal, a list of {dim} numbers")
+            raw = _vector(f"{where}.normal", item["normal"], dim)
+            norm = math.sqrt(sum(c * c for c in raw))
+            if norm == 0.0:
+                raise ConfigError(f"{where}.normal", list(raw), "a non-zero vector into the fluid")
+            normal = _pad3(tuple(c / norm for c in raw))
+            diameter = _number(f"{where}.diameter", item.get("diameter", 0.0), lo=0.0)
+        else:
+            for key in ("normal", "diameter"):
+                if key in item:
+                    raise ConfigError(f"{where}.{key}", item[key], f"no {key}: only pressure_sensor probes take one")
+        probes.append(Probe(name, kind, position, radius, heights, normal, diameter))
     return probes
 
 

@@ -1,0 +1,61 @@
+"""Wall pressure sensors (measure.sensors): on the walls and floor of a still tank a transducer
+reads rho0 g d, d its depth below the surface; one above the water reads 0. The tank is 0.4 m
+long, water 0.2 m deep, dynamic boundary particles, dx = 1 cm, settled for 0.5 s, read at 1 s.
+Tolerance 2% (measured: within 0.8% at 1 cm, 1.3% at 5 mm).
+"""
+import numpy as np
+import pytest
+
+from gpusph_ros.measure.sensors import face_points
+from gpusph_ros.runner import Run
+from gpusph_ros.scenes.schema import ConfigError, parse_scene
+from gpusph_ros.scenes.settings import resolve
+
+pytestmark = pytest.mark.physics
+
+SENSORS = {  # name: (position, normal, depth below the surface)
+    "right_05": ([0.4, 0.15], [-1, 0], 0.05), "right_10": ([0.4, 0.10], [-1, 0], 0.10),
+    "right_15": ([0.4, 0.05], [-1, 0], 0.15), "left_19": ([0.0, 0.01], [1, 0], 0.19),
+    "floor": ([0.2, 0.0], [0, 1], 0.20), "dry": ([0.4, 0.28], [-1, 0], None),
+}
+
+
+def still_tank():
+    return parse_scene({
+        "name": "still_tank", "dim": 2, "tank": [0.4, 0.3], "depth": 0.2, "walls": "particles",
+        "fluid": [{"name": "water", "lo": [0.0, 0.0], "hi": [0.4, 0.2]}],
+        "probes": {name: {"type": "pressure_sensor", "position": pos, "normal": n, "diameter": 0.02}
+                   for name, (pos, n, _) in SENSORS.items()},
+        "run": {"end_time": 1.0, "settle_tau": 0.05, "settle_until": 0.5}})
+
+
+def test_a_sensor_on_a_still_tanks_wall_reads_rho0_g_d():
+    scene = still_tank()
+    run = Run(scene, resolve(scene, dx=0.01, boundary="dynamic"))
+    run.solver.advance(1.0)
+    read = run.measurements.sample()["sensors"]
+    for name, (_, _, depth) in SENSORS.items():
+        if depth is None:
+            assert read[name] == 0.0
+        else:
+            assert read[name] == pytest.approx(1000.0 * 9.81 * depth, rel=0.02), name
+
+
+def test_the_face_is_sampled_across_its_diameter_inside_the_tank():
+    pts = face_points((1.61, 0.003, 0.0), (-1.0, 0.0, 0.0), 0.009, 0.005, 2, (1.61, 0.6, 0.0))
+    assert np.allclose(pts[:, 0], 1.61) and pts[:, 1].min() >= 0.0 and pts[:, 1].max() == pytest.approx(0.0055)
+    disc = face_points((0.5, 0.5, 0.0), (0.0, 0.0, 1.0), 0.02, 0.005, 3, (1.0, 1.0, 1.0))
+    assert len(disc) == 49 and np.allclose(disc[:, 2], 0.0)  # every dx/2 = 2.5 mm within a 1 cm radius
+    assert np.linalg.norm(disc[:, :2] - 0.5, axis=1).max() <= 0.01 + 1e-12
+
+
+@pytest.mark.parametrize("probe, field", [({"type": "pressure_sensor", "position": [0.4, 0.1]}, "normal"),
+                                          ({"type": "pressure_sensor", "position": [0.4, 0.1], "normal": [0, 0]},
+                                           "normal"),
+                                          ({"type": "pressure_sensor", "position": [0.4, 0.1], "normal": [-1, 0],
+                                            "diameter": -1}, "diameter"),
+                                          ({"type": "point", "position": [0.2, 0.1], "normal": [1, 0]}, "normal")])
+def test_a_bad_sensor_is_refused_naming_the_field(probe, field):
+    with pytest.raises(ConfigError, match=f"probes.s.{field}"):
+        parse_scene({"name": "t", "dim": 2, "tank": [0.4, 0.3], "depth": 0.2,
+                     "fluid": [{"name": "water", "lo": [0.0, 0.0], "hi": [0.4, 0.2]}], "probes": {"s": probe}})
