@@ -59,3 +59,21 @@ def test_a_bad_sensor_is_refused_naming_the_field(probe, field):
     with pytest.raises(ConfigError, match=f"probes.s.{field}"):
         parse_scene({"name": "t", "dim": 2, "tank": [0.4, 0.3], "depth": 0.2,
                      "fluid": [{"name": "water", "lo": [0.0, 0.0], "hi": [0.4, 0.2]}], "probes": {"s": probe}})
+
+
+def test_the_wall_pressure_load_on_a_block_in_a_still_tank_is_hydrostatic():
+    """A 0.1 x 0.1 m block on the floor under 0.2 m of still water (2D, per unit depth): the water
+    pushes it down by rho0 g (0.2 - 0.1) x 0.1 = 98.1 N/m over its top, and its two sides (147.2 N/m
+    each, from rho0 g (0.2 - z) over z in [0, 0.1]) cancel. Within 2% of those."""
+    scene = parse_scene({
+        "name": "block_tank", "dim": 2, "tank": [0.6, 0.3], "depth": 0.2, "walls": "particles",
+        "fluid": [{"name": "water", "lo": [0.0, 0.0], "hi": [0.6, 0.2]}],
+        "obstacles": [{"name": "block", "lo": [0.25, 0.0], "hi": [0.35, 0.1], "displaces_fluid": True}],
+        "run": {"end_time": 1.0, "settle_tau": 0.05, "settle_until": 0.5}})
+    run = Run(scene, resolve(scene, dx=0.01, boundary="dynamic"))
+    run.solver.advance(1.0)
+    force, torque = run.measurements.sample()["pressure_loads"]["block"]
+    rho_g = 1000.0 * 9.81
+    assert force[1] == pytest.approx(-rho_g * 0.1 * 0.1, rel=0.02)
+    assert abs(force[0]) < 0.02 * rho_g * (0.2 * 0.1 - 0.1 ** 2 / 2)
+    assert abs(torque[2]) < 0.02 * rho_g * 0.1 * 0.1 * 0.05  # the top's load through the centre

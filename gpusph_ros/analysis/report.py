@@ -4,7 +4,8 @@ and scenario), as a JSON record, a printed table and PNG charts.
 DamBreak 1 (scenes dambreak1_*; thesis 4.2): peak x-velocity at the probe and its RMS error
 against Yeh & Petroff's points; peak x-force on the obstruction from pressure blocks at its faces
 and 0.06 m away, the RMS error of the latter against the measured force; the peak of the net force
-on the obstruction's particles (what GPUSPH's and DualSPHysics' own force output give); max
+on the obstruction's particles (what GPUSPH's and DualSPHysics' own force output give) and of the
+force from the wall pressure over its faces (measure/sensors.py), with its RMS error; max
 forward and return velocity at point D and the time between them. All series get the 0.04 s
 moving average; velocity and force are shifted so their peaks meet the experiment's (the
 thesis's alignment), point D is not. DamBreak 2 (dambreak2_*; thesis 4.3): bore arrival (greatest
@@ -31,6 +32,8 @@ LABELS = {
     "peak_force_0p06m": ("peak x-force, pressure blocks 0.06 m out", "N"),
     "force_rms_0p06m": ("RMS error of the force (blocks 0.06 m out)", "N"),
     "peak_force_body": ("peak x-force on the obstruction's particles", "N"),
+    "peak_force_pressure_load": ("peak x-force from the wall pressure over its faces", "N"),
+    "force_rms_pressure_load": ("RMS error of the force from the wall pressure", "N"),
     "D_max_velocity": ("max forward velocity at D", "m/s"),
     "D_return_time": ("time from max forward to max return flow at D", "s"),
     "bore_arrival": ("bore arrival (greatest acceleration)", "s"),
@@ -87,6 +90,17 @@ def dambreak1(rec, meta, data, scenario, dx, same_case):
     tb, fb = M.moving_average(*_x(rec.topic(f"bodies/{body}/wrench"), "force"))
     forces["peak_force_body"] = (M.align_to(tb, fb, f_ref), fb)
     out.append(_metric("peak_force_body", M.peak(tb, fb)[1], f_exp_peak, note="no GPUSPH counterpart in the thesis"))
+    try:  # recordings from before the wall-pressure load lack it
+        tw, fw = M.moving_average(*_x(rec.topic(f"bodies/{body}/pressure_load"), "force"))
+    except KeyError:
+        tw = None
+    if tw is not None:
+        forces["peak_force_pressure_load"] = (M.align_to(tw, fw, f_ref), fw)
+        out.append(_metric("peak_force_pressure_load", M.peak(tw, fw)[1], f_exp_peak,
+                           note="no GPUSPH counterpart in the thesis"))
+        if exp_f:
+            out.append(_metric("force_rms_pressure_load", M.rms_error(*forces["peak_force_pressure_load"], *exp_f),
+                               note="experimental scatter 1.50 N"))
     curves["force"] = (forces, exp_f)
     td, ud = M.moving_average(*_x(rec.topic("probes/D")))
     fr = M.forward_return(td, ud)

@@ -1,4 +1,5 @@
-"""Wall pressure sensors: what a transducer on a wall or body face reads.
+"""Wall pressure: what a transducer on a wall or body face reads, and the load on a body from the
+pressure over its faces.
 
 A transducer averages the pressure over its face. Under walls of boundary particles the fluid
 next to a wall is half-supported and the wall particles' own pressure is noise (dynamic boundary
@@ -15,8 +16,14 @@ it (u.n = 0, so the fluid's normal acceleration is the wall's, zero) leaves
 
 exact for hydrostatics (a floor sensor's 1.5 h of water added back; nothing on a side wall) and
 first order in delta during an impact. Points of the face outside the tank are dropped (a sensor
-at 3 mm on a wall sampled 4.5 mm across); a dry point reads 0 (atmospheric). The reading is the
-mean over the face's points.
+at 3 mm on a wall sampled 4.5 mm across); a dry point reads 0 (atmospheric). A sensor reads the
+mean over its face's points (``wall_pressure``).
+
+A box body's load from the wall pressure (``face_load_points``, ``face_load``): each face the fluid
+can reach (not one lying on a tank wall or the floor) tiled in cells dx/2 across, the wall pressure
+at each cell's centre as above, F = -sum p n dA and T = sum (x - c) x (-p n dA) about the centre c;
+in 2D per unit depth. This is what a load cell behind a rigid face reads of the pressure, without
+the boundary particles' own noise that the net force on them carries (forces.py).
 """
 import math
 
@@ -54,9 +61,45 @@ def sensor_points(probe, h: float, dx: float, dim: int, tank) -> np.ndarray:
         + OFFSET_H * h * np.asarray(probe.normal, dtype=np.float64)
 
 
+def face_pressure(pressure, weight, normal, h: float, rho0: float, gravity) -> np.ndarray:
+    """The pressure on the face at each point, from the ``pressure`` interpolated OFFSET_H h in
+    front of it (and the kernel ``weight`` there, 0 where dry); ``normal``: one for all points, or
+    one per point."""
+    drop = rho0 * (np.asarray(normal, dtype=np.float64) @ np.asarray(gravity, dtype=np.float64)) * OFFSET_H * h
+    return np.where(np.asarray(weight) > 0.0, np.asarray(pressure) - drop, 0.0)  # p_wall = p - rho0 (g.n) delta
+
+
 def wall_pressure(pressure, weight, normal, h: float, rho0: float, gravity) -> float:
-    """The face's mean pressure from the interpolated ``pressure`` (and kernel ``weight``, 0 where
-    dry) at its sensor_points."""
-    drop = rho0 * float(np.dot(gravity, normal)) * OFFSET_H * h  # p_wall = p - rho0 (g.n) delta
-    wet = np.asarray(weight) > 0.0
-    return float(np.mean(np.where(wet, np.asarray(pressure) - drop, 0.0)))
+    """A sensor's reading: the mean of face_pressure over its face."""
+    return float(np.mean(face_pressure(pressure, weight, normal, h, rho0, gravity)))
+
+
+def face_load_points(lo, hi, dx: float, dim: int, tank):
+    """Cell centres (n x 3), inward normals (n x 3, out of the body into the fluid) and cell areas
+    (n; lengths in 2D) tiling the faces of the box [lo, hi] the fluid can reach."""
+    lo, hi, tank = (np.asarray(v, dtype=np.float64) for v in (lo, hi, tank))
+    pts, normals, areas = [], [], []
+    for ax in range(dim):
+        for side, sign in ((lo, -1.0), (hi, 1.0)):
+            if side[ax] <= 1e-9 or side[ax] >= tank[ax] - 1e-9:
+                continue  # on the floor or a tank wall: no fluid behind it
+            across = [a for a in range(dim) if a != ax]
+            counts = [max(1, int(math.ceil((hi[a] - lo[a]) / (0.5 * dx)))) for a in across]
+            axes = [lo[a] + (np.arange(c) + 0.5) * (hi[a] - lo[a]) / c for a, c in zip(across, counts)]
+            grid = np.meshgrid(*axes, indexing="ij")
+            face = np.zeros((grid[0].size, 3))
+            face[:, ax] = side[ax]
+            for a, g in zip(across, grid):
+                face[:, a] = g.ravel()
+            n = np.zeros(3)
+            n[ax] = sign
+            pts.append(face)
+            normals.append(np.repeat(n[None, :], len(face), axis=0))
+            areas.append(np.full(len(face), np.prod([(hi[a] - lo[a]) / c for a, c in zip(across, counts)])))
+    return np.concatenate(pts), np.concatenate(normals), np.concatenate(areas)
+
+
+def face_load(p_face, points, normals, areas, centre):
+    """(force, torque about ``centre``) on the body from the pressure ``p_face`` on its faces."""
+    df = -(np.asarray(p_face) * np.asarray(areas))[:, None] * normals
+    return df.sum(axis=0), np.cross(points - np.asarray(centre), df).sum(axis=0)

@@ -8,7 +8,7 @@ from .blocks import PressureBlockForce
 from .columns import ColumnMeans
 from .forces import BodyWrench
 from .probes import PointProbes
-from .sensors import sensor_points, wall_pressure
+from .sensors import OFFSET_H, face_load, face_load_points, face_pressure, sensor_points, wall_pressure
 from .surface import elevation, gauge_points
 
 
@@ -34,26 +34,34 @@ class Measurements:
                 continue
             self._slices[probe.name] = (len(points), len(points) + len(pts), pts)
             points.extend(pts)
+        # each obstacle's faces, for its load from the wall pressure (sensors.py)
+        self._faces = {}
+        for obstacle in scene.obstacles:
+            pts, normals, areas = face_load_points(obstacle.lo, obstacle.hi, cfg.dx, dim, scene.tank)
+            self._faces[obstacle.name] = (len(points), pts, normals, areas)
+            points.extend(pts + OFFSET_H * cfg.h * normals)
         self._points = PointProbes(solver, points) if points else None
         self._wall = (cfg.h, cfg.rho0, cfg.gravity)
         columns = [p for p in scene.probes if p.type == "column"]
         self._column_names = [p.name for p in columns]
         self._columns = (ColumnMeans(solver, [p.position for p in columns], [p.radius_dx * cfg.dx for p in columns])
                          if columns else None)
-        self._wrenches, self._blocks = {}, {}
+        self._wrenches, self._blocks, self._centres = {}, {}, {}
         for obstacle in scene.obstacles:
             centre = 0.5 * (np.asarray(obstacle.lo) + np.asarray(obstacle.hi))
             if dim == 2:
                 centre[2] = 0.0
+            self._centres[obstacle.name] = centre
             self._wrenches[obstacle.name] = BodyWrench(solver, model.bodies[obstacle.name], centre)
             self._blocks[obstacle.name] = PressureBlockForce(solver, obstacle.lo, obstacle.hi, obstacle.block_offsets)
 
     def sample(self) -> dict:
         """{"points": {name: {vel, pressure, rho}}, "profiles": {name: {heights, vel}},
         "gauges": {name: elevation}, "sensors": {name: wall pressure}, "columns": {name: {vel, count}},
-        "wrenches": {name: (force, torque)}, "blocks": {name: {offset: (fx, upstream, downstream)}}}."""
+        "wrenches": {name: (force, torque)}, "pressure_loads": {name: (force, torque) from the wall
+        pressure}, "blocks": {name: {offset: (fx, upstream, downstream)}}}."""
         out = {"points": {}, "profiles": {}, "gauges": {}, "sensors": {}, "columns": {}, "wrenches": {},
-               "blocks": {}}
+               "pressure_loads": {}, "blocks": {}}
         up = self.scene.dim - 1
         if self._points is not None:
             values = self._points.sample()
@@ -70,6 +78,10 @@ class Measurements:
                                                                probe.normal, *self._wall)
                 else:
                     out["gauges"][probe.name] = elevation(pts[:, up], values["weight"][a:b])
+            for name, (a, pts, normals, areas) in self._faces.items():
+                b = a + len(pts)
+                p_face = face_pressure(values["pressure"][a:b], values["weight"][a:b], normals, *self._wall)
+                out["pressure_loads"][name] = face_load(p_face, pts, normals, areas, self._centres[name])
         if self._columns is not None:
             values = self._columns.sample()
             for k, name in enumerate(self._column_names):

@@ -98,7 +98,8 @@ def measurement_messages(t: float, sample: dict, scene, namespace: str = "/sim_n
     sensor's reading (FluidPressure), depth-averaged
     velocity (Vector3Stamped), profile points (Vector3Stamped per height, h0, h1, ...), surface
     elevation (PointStamped at the gauge, z = elevation), the wrench on each body about its
-    centre, and each body's pressure-block force (WrenchStamped, force.x only)."""
+    centre (the net force on its particles, and the load of the wall pressure over its faces),
+    and each body's pressure-block force (WrenchStamped, force.x only)."""
     out = []
     probes = f"{namespace}/probes"
     for name, values in sample["points"].items():
@@ -119,6 +120,8 @@ def measurement_messages(t: float, sample: dict, scene, namespace: str = "/sim_n
         out.append((f"{probes}/{name}", point(t, where, frame_id)))
     for name, (force, torque) in sample["wrenches"].items():
         out.append((f"{namespace}/bodies/{name}/wrench", wrench(t, force, torque, frame_id)))
+    for name, (force, torque) in sample.get("pressure_loads", {}).items():
+        out.append((f"{namespace}/bodies/{name}/pressure_load", wrench(t, force, torque, frame_id)))
     for name, by_offset in sample["blocks"].items():
         for offset, (fx, _, _) in by_offset.items():
             out.append((f"{namespace}/bodies/{name}/pressure_blocks/{block_topic(offset)}",

@@ -102,10 +102,12 @@ def build(scene: Scene, **numerics) -> Model:
     layers = boundary_layers(cfg.boundary, cfg.hdx)
     bodies = {}
     for k, o in enumerate(scene.obstacles):
-        # boundary particles on the lattice, a wall's thickness in from each side face
+        # boundary particles on the lattice, a wall's thickness in from each side face and from the
+        # top of a block lower than the tank (one as tall stands out of the water: no lid needed)
         block = lattice(o.lo, o.hi, dx, dim)
+        lid = o.hi[up] < scene.tank[up] - 1e-9
         inner_lo = [o.lo[ax] + layers * dx if ax != up else -np.inf for ax in range(dim)]
-        inner_hi = [o.hi[ax] - layers * dx if ax != up else np.inf for ax in range(dim)]
+        inner_hi = [o.hi[ax] - layers * dx if ax != up or lid else np.inf for ax in range(dim)]
         block = block[~_inside(block, inner_lo, inner_hi, dim)]
         pos.append(block)
         rho.append(np.full(len(block), cfg.rho0))  # mostly dry at the start; dynamic ones adjust
