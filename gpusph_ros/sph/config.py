@@ -86,6 +86,10 @@ class SolverConfig:
     delta: float = 0.1  # delta-SPH coefficient (Molteni & Colagrossi 2009)
     xsph: bool = False  # on in the thesis runs; off by default as in DualSPHysics
     xsph_eps: float = 0.5  # thesis Eq. 2.22
+    # particle shifting (shifting.py, Lind et al. 2012); off by default, as in DualSPHysics
+    shifting: bool = False
+    shift_coef: float = -2.0  # A, DualSPHysics' ShiftCoef
+    shift_tfs: float = 0.0  # free-surface threshold of div r; 0 = DualSPHysics' 1.5 in 2D, 2.75 in 3D
     shepard_every: int = 0  # steps between Shepard filters (thesis Eq. 2.28 used 40); 0 = off
     rho0: float = 1000.0
     gamma: float = 7.0
@@ -146,6 +150,11 @@ class SolverConfig:
         return self.c0_coef * math.sqrt(self.g_norm * self.depth)
 
     @property
+    def free_surface_threshold(self) -> float:
+        """shift_tfs, or DualSPHysics' value for the dimension."""
+        return self.shift_tfs or (1.5 if self.dim == 2 else 2.75)
+
+    @property
     def eos_b(self) -> float:
         """Tait stiffness B = c0^2 rho0 / gamma (thesis Eq. 2.13)."""
         return self.sound_speed ** 2 * self.rho0 / self.gamma
@@ -192,6 +201,12 @@ class SolverConfig:
         f = self.max_excluded_fraction
         if isinstance(f, bool) or not isinstance(f, (int, float)) or not 0.0 <= f < 1.0:
             raise ConfigError("max_excluded_fraction", f, "a fraction of the fluid mass in [0, 1) (0 = strict)")
+        if isinstance(self.shift_coef, bool) or not isinstance(self.shift_coef, (int, float)) \
+                or not -10.0 <= self.shift_coef < 0.0:
+            raise ConfigError("shift_coef", self.shift_coef, "a number in [-10, 0) (DualSPHysics uses -2)")
+        if isinstance(self.shift_tfs, bool) or not isinstance(self.shift_tfs, (int, float)) \
+                or not 0.0 <= self.shift_tfs < self.dim:
+            raise ConfigError("shift_tfs", self.shift_tfs, f"a number in [0, {self.dim}) (0 = 1.5 in 2D, 2.75 in 3D)")
         if not MIN_CFL <= self.cfl <= 1.0:
             raise ConfigError("cfl", self.cfl, f"a number in [{MIN_CFL:g}, 1]")
         if 0.0 < self.dt_fixed < MIN_DT_FIXED:

@@ -19,7 +19,7 @@ from types import SimpleNamespace
 
 import warp as wp
 
-from . import boundaries, density, eos, health, kernels, momentum, neighbours, state, viscosity, xsph
+from . import boundaries, density, eos, health, kernels, momentum, neighbours, shifting, state, viscosity, xsph
 
 FLUID = state.FLUID
 BOUNDARY = state.BOUNDARY
@@ -33,7 +33,7 @@ SPS = viscosity.VISCOSITY_ID["sps"]
 @functools.lru_cache(maxsize=None)
 def _force_passes(scalar):
     """The passes that evaluate the equations: the equation of state, the SPS strain, the pair
-    interactions (forces, density rates, XSPH) and the Shepard filter."""
+    interactions (forces, density rates, XSPH, shifting) and the Shepard filter."""
     vec = wp.types.vector(3, scalar)
     mat33 = wp.types.matrix((3, 3), scalar)
     S = state.build(scalar)
@@ -47,6 +47,8 @@ def _force_passes(scalar):
     D = density.build(scalar)
     continuity, delta_diffusion, shepard_density = D.continuity, D.delta_diffusion, D.shepard
     xsph_velocity = xsph.build(scalar).xsph_velocity
+    Sh = shifting.build(scalar)
+    concentration_terms, shift_velocity = Sh.concentration_terms, Sh.shift_velocity
     B = boundaries.build(scalar)
     lennard_jones, monaghan_kajtar, plane_wall = B.lennard_jones, B.monaghan_kajtar, B.plane_wall
     N = neighbours.grid(scalar)
@@ -133,13 +135,16 @@ def _force_passes(scalar):
     def interact(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32), f: Fields,
                  plane_point: wp.array(dtype=vec), plane_normal: wp.array(dtype=vec),
                  acc: wp.array(dtype=vec), drho: wp.array(dtype=scalar), xsph: wp.array(dtype=vec),
-                 maxima: wp.array(dtype=scalar), clumped: wp.array(dtype=wp.int32), chunk: int, stride: int):
+                 shift: wp.array(dtype=vec), maxima: wp.array(dtype=scalar), clumped: wp.array(dtype=wp.int32),
+                 chunk: int, stride: int):
         i = wp.tid() * stride + chunk
         xi = f.pos[i]
         base = i * grid.max_neighbours
         a = vec(scalar(0.0))
         dr = scalar(0.0)
         xs = vec(scalar(0.0))
+        grad_c = vec(scalar(0.0))
+        div_r = scalar(0.0)
         close = int(0)
         if f.ptype[i] == FLUID:
             a = p.gravity
@@ -154,6 +159,13 @@ def _force_passes(scalar):
                 dr += ddr
                 xs += dxs
                 mu_max = wp.max(mu_max, mu)
+                if p.shift_a_h != scalar(0.0) and (f.ptype[j] == FLUID or p.boundary == DYNAMIC):
+                    r = wp.length(r_ij)
+                    if r < scalar(2.0) * p.h:
+                        dc, ddiv = concentration_terms(f.mass[j] / f.rho[j], r_ij,
+                                                       r_ij * grad_factor(p.kernel, p.norm, p.inv_h, r))
+                        grad_c += dc
+                        div_r += ddiv
             if p.n_planes > 0:
                 ui = f.vel[i]
                 rho_i = f.rho[i]
@@ -184,6 +196,8 @@ def _force_passes(scalar):
         acc[i] = a
         drho[i] = dr
         xsph[i] = xs
+        if p.shift_a_h != scalar(0.0):
+            shift[i] = shift_velocity(p.shift_a_h, wp.length(f.vel[i]), grad_c, div_r, p.shift_tfs, p.dim)
         clumped[i] = close
 
     @wp.kernel(enable_backward=False, module="unique")
@@ -208,6 +222,7 @@ def _time_passes(scalar):
     vec = wp.types.vector(3, scalar)
     Params = state.build(scalar).Params
     healthy = health.build(scalar).healthy
+    capped = shifting.build(scalar).capped
 
     @wp.kernel(enable_backward=False, module="unique")
     def choose_dt(p: Params, t_target: wp.float64, maxima: wp.array(dtype=scalar), fail: wp.array(dtype=wp.int32),
@@ -244,9 +259,10 @@ def _time_passes(scalar):
     def integrate(p: Params, clock: wp.array(dtype=wp.float64), factor: scalar, pos: wp.array(dtype=vec),
                   vel: wp.array(dtype=vec), rho: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
                   vel_rate: wp.array(dtype=vec), acc: wp.array(dtype=vec), drho: wp.array(dtype=scalar),
-                  xsph: wp.array(dtype=vec), pos_out: wp.array(dtype=vec), vel_out: wp.array(dtype=vec),
-                  rho_out: wp.array(dtype=scalar)):
-        """x_out = x + f dt (u_rate + xsph), u_out = u + f dt a, rho_out = rho + f dt drho.
+                  xsph: wp.array(dtype=vec), shift: wp.array(dtype=vec), pos_out: wp.array(dtype=vec),
+                  vel_out: wp.array(dtype=vec), rho_out: wp.array(dtype=scalar)):
+        """x_out = x + f dt (u_rate + xsph) [+ the shift f dt s, capped], u_out = u + f dt a,
+        rho_out = rho + f dt drho.
 
         f = 1/2 with the rates at n (predictor), f = 1 with the rates at n + 1/2 (corrector).
         Boundary particles keep position and velocity; dynamic ones update density.
@@ -259,6 +275,8 @@ def _time_passes(scalar):
             vel_out[i] = vel[i]
             return
         x = pos[i] + dt * (vel_rate[i] + xsph[i])
+        if p.shift_a_h != scalar(0.0):
+            x += capped(dt * shift[i], p.shift_cap)
         for ax in range(3):
             if p.periodic[ax] != 0:
                 span = p.hi[ax] - p.lo[ax]

@@ -115,6 +115,9 @@ class Solver:
         p.delta_hc0 = (cfg.delta * cfg.h * cfg.sound_speed
                        if density.DENSITY_DIFFUSION_ID[cfg.density_diffusion] else 0.0)
         p.xsph_eps = cfg.xsph_eps if cfg.xsph else 0.0
+        p.shift_a_h = cfg.shift_coef * cfg.h if cfg.shifting else 0.0
+        p.shift_tfs = cfg.free_surface_threshold
+        p.shift_cap = 0.1 * cfg.dx
         p.rho0 = cfg.rho0
         p.eos_b = cfg.eos_b
         p.gamma = cfg.gamma
@@ -169,6 +172,7 @@ class Solver:
         self._pos_h, self._vel_h, self._rho_h = (wp.zeros_like(a) for a in (self.pos, self.vel, self.rho))
         self._pos_c, self._vel_c, self._rho_c = (wp.zeros_like(a) for a in (self.pos, self.vel, self.rho))
         self.acc, self._xsph = wp.zeros(n, dtype=v, device=dev), wp.zeros(n, dtype=v, device=dev)
+        self._shift = wp.zeros(n, dtype=v, device=dev)
         self._drho = wp.zeros(n, dtype=s, device=dev)
         shared = dict(pressure=self.pressure, p_rho2=wp.zeros(n, dtype=s, device=dev), mass=self.mass,
                       ptype=self.ptype, body=self.body, tau_diag=wp.zeros(n, dtype=v, device=dev),
@@ -214,7 +218,7 @@ class Solver:
         if self.config.viscosity == "sps":
             self.launch(k.sps_strain, n, [p, nl.grid, nl.nbr, nl.count, f])
         self.launch(k.interact, n, [p, nl.grid, nl.nbr, nl.count, f, self._plane_pt, self._plane_n, self.acc,
-                                    self._drho, self._xsph, self._maxima, self._clumped])
+                                    self._drho, self._xsph, self._shift, self._maxima, self._clumped])
 
     def _reorder(self):
         state = [self.pos, self.vel, self.rho, self.mass, self.ptype, self.body, self.ids, self._needs_list]
@@ -234,11 +238,11 @@ class Solver:
         wp.launch(k.choose_dt, dim=1, inputs=[p, t_target, self._maxima, self._fail, self._clock], device=dev)
         wp.launch(k.integrate, dim=n,
                   inputs=[p, self._clock, 0.5, self.pos, self.vel, self.rho, self.ptype, self.vel, self.acc,
-                          self._drho, self._xsph, self._pos_h, self._vel_h, self._rho_h], device=dev)
+                          self._drho, self._xsph, self._shift, self._pos_h, self._vel_h, self._rho_h], device=dev)
         self._forces(self._fields_h)
         wp.launch(k.integrate, dim=n,
                   inputs=[p, self._clock, 1.0, self.pos, self.vel, self.rho, self.ptype, self._vel_h, self.acc,
-                          self._drho, self._xsph, self._pos_c, self._vel_c, self._rho_c], device=dev)
+                          self._drho, self._xsph, self._shift, self._pos_c, self._vel_c, self._rho_c], device=dev)
         wp.launch(k.check_particles, dim=n,
                   inputs=[p, self.pos, self._pos_c, self._vel_c, self._rho_c, self.mass, self.ptype, self.ids,
                           self._solid_lo, self._solid_hi, self._fail, self._faulty, self._pending,

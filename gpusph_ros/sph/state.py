@@ -36,6 +36,9 @@ def build(scalar):
         plane_r0: scalar
         delta_hc0: scalar  # delta h c0, 0 when density diffusion is off
         xsph_eps: scalar  # 0 when XSPH is off
+        shift_a_h: scalar  # shifting's A h; 0 when shifting is off
+        shift_tfs: scalar  # the free-surface threshold of div r
+        shift_cap: scalar  # 0.1 dx: the largest shift of one step along an axis
         rho0: scalar
         eos_b: scalar
         gamma: scalar
