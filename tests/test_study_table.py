@@ -73,6 +73,16 @@ def test_error_against_cost_marks_the_pareto_front(cost):
     assert fig.axes[0].get_xscale() == "log" and fig.axes[0].get_title()
 
 
+def test_a_case_that_excluded_particles_is_ringed_with_its_share():
+    rows = [dict(r) for r in ROWS]
+    rows[1].update(excluded_particles=3, excluded_fraction=0.0004)
+    fig = charts.error_vs_cost(rows, "peak_velocity")
+    lines = {line.get_label(): line for line in fig.axes[0].get_lines()}
+    ringed = lines["excluded particles"]
+    assert list(zip(ringed.get_xdata(), ringed.get_ydata())) == [(400.0, 12.0)]
+    assert "0.04% excluded" in [t.get_text() for t in fig.axes[0].texts]
+
+
 def test_no_chart_without_an_error_measure(tmp_path):
     assert charts.error_vs_dx(ROWS, "D_return_time") is None
     paths = charts.write(ROWS, ["peak_velocity", "D_return_time"], tmp_path)

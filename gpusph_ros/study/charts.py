@@ -3,7 +3,8 @@
 - error against dx, one line per scenario, GPUSPH's runs of the same thesis scenario beside ours
   (the style of the thesis's Figures 10-12, 19-23, 40-48);
 - error against wall time and against particle-steps, every completed case a point, the Pareto
-  front marked: for a given accuracy, the cheapest setting.
+  front marked: for a given accuracy, the cheapest setting; a case that excluded particles is
+  ringed in grey with the share it lost.
 """
 import matplotlib
 
@@ -76,6 +77,13 @@ def error_vs_cost(rows, metric, cost="wall_time_s"):
     for (scene, scenario), group in _groups([p[3] for p in points]).items():
         ax.plot([r[cost] for r in group], [error_of(r, metric)[0] for r in group], "o",
                 label=f"{scene}, {scenario}")
+    lost = [p for p in points if float(p[3].get("excluded_particles") or 0) > 0]
+    if lost:  # a case that excluded particles (sph.health) is marked, its share of the fluid stated
+        ax.plot([p[0] for p in lost], [p[1] for p in lost], "o", mfc="none", mec="grey", ms=11,
+                label="excluded particles")
+        for c, e, _, r in lost:
+            ax.annotate(f"{float(r.get('excluded_fraction') or 0):.2%} excluded", (c, e), textcoords="offset points",
+                        xytext=(4, -10), fontsize=6, color="grey")
     front = pareto([(c, e, r) for c, e, _, r in points])
     ax.plot([p[0] for p in front], [p[1] for p in front], "k-", drawstyle="steps-post", lw=1.2, label="Pareto front")
     for c, e, r in front:
