@@ -32,6 +32,7 @@ LABELS = {
     "peak_force_0p06m": ("peak x-force, pressure blocks 0.06 m out", "N"),
     "force_rms_0p06m": ("RMS error of the force (blocks 0.06 m out)", "N"),
     "peak_force_body": ("peak x-force on the obstruction's particles", "N"),
+    "force_rms_body": ("RMS error of the force on the obstruction's particles", "N"),
     "peak_force_pressure_load": ("peak x-force from the wall pressure over its faces", "N"),
     "force_rms_pressure_load": ("RMS error of the force from the wall pressure", "N"),
     "D_max_velocity": ("max forward velocity at D", "m/s"),
@@ -90,6 +91,9 @@ def dambreak1(rec, meta, data, scenario, dx, same_case):
     tb, fb = M.moving_average(*_x(rec.topic(f"bodies/{body}/wrench"), "force"))
     forces["peak_force_body"] = (M.align_to(tb, fb, f_ref), fb)
     out.append(_metric("peak_force_body", M.peak(tb, fb)[1], f_exp_peak, note="no GPUSPH counterpart in the thesis"))
+    if exp_f:
+        out.append(_metric("force_rms_body", M.rms_error(*forces["peak_force_body"], *exp_f),
+                           note="experimental scatter 1.50 N"))
     try:  # recordings from before the wall-pressure load lack it
         tw, fw = M.moving_average(*_x(rec.topic(f"bodies/{body}/pressure_load"), "force"))
     except KeyError:
