@@ -138,6 +138,7 @@ class Solver:
         p.penetration = cfg.penetration_ratio * cfg.dx
         p.n_solids = len(cfg.solids)
         p.clump_r = cfg.clump_ratio * cfg.dx
+        p.clump_wall = health.CLUMP_WALL_DX * cfg.dx
         p.clump_fraction = cfg.clump_fraction
         p.n_fluid = max(1, self.n_fluid)
         # the energy check's slack: a fraction of M g H
@@ -250,8 +251,8 @@ class Solver:
         if self._launched % _CENSUS_EVERY == 0:
             self._energy_sum[0:1].zero_()
             wp.launch(k.census, dim=n, inputs=[p, self._pos_c, self._vel_c, self._rho_c, self.mass, self.ptype,
-                                               self.ids, self._clumped, self._energy_sum, self._clump_count],
-                      device=dev)
+                                               self.ids, self._clumped, self._solid_lo, self._solid_hi,
+                                               self._energy_sum, self._clump_count], device=dev)
             wp.launch(k.census_check, dim=1, inputs=[p, self._energy_sum, self._clump_count, self._fail],
                       device=dev)
         wp.launch(k.exclusion_check, dim=1, inputs=[p, self._clock, self._pending, self._pending_mass,

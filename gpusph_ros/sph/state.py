@@ -59,6 +59,7 @@ def build(scalar):
         penetration: scalar  # penetration_ratio dx
         n_solids: int
         clump_r: scalar  # clump_ratio dx
+        clump_wall: scalar  # health.CLUMP_WALL_DX dx: no clumping counted closer to a wall
         clump_fraction: wp.float64
         n_fluid: int
         energy_slack: wp.float64  # energy_growth_ratio M g H; 0 = off
