@@ -83,10 +83,12 @@ def test_mcap_ros2_reader_decodes_the_file_and_metadata_describes_the_run(record
     per_topic = {}
     for m in msgs:
         per_topic[m.channel.topic] = per_topic.get(m.channel.topic, 0) + 1
-    assert len(per_topic) == 9 and set(per_topic.values()) == {4}
-    wrench = [m.ros_msg for m in msgs if m.channel.topic.endswith("obstruction/wrench")][-1]
-    force, _ = run.measurements.sample()["wrenches"]["obstruction"]
-    assert wrench.wrench.force.x == pytest.approx(force[0], rel=1e-6, abs=1e-9)
+    assert len(per_topic) == 10 and set(per_topic.values()) == {4}
+    sample = run.measurements.sample()
+    for topic, key in (("obstruction/wrench", "wrenches"), ("obstruction/pressure_load", "pressure_loads")):
+        wrench = [m.ros_msg for m in msgs if m.channel.topic.endswith(topic)][-1]
+        force, _ = sample[key]["obstruction"]
+        assert wrench.wrench.force.x == pytest.approx(force[0], rel=1e-6, abs=1e-9)
     rec = read(path)
     assert rec.complete and rec.result["status"] == "completed"
     assert rec.metadata["scene_name"] == "dambreak1_thesis" and rec.metadata["run_config"]["dx"] == 0.06
