@@ -90,41 +90,52 @@ def build(scalar):
         return bad == 0
 
     @wp.func
+    def in_box(x: vec, lo: vec, hi: vec, grow: scalar, axes: int) -> bool:
+        """Whether x lies in [lo - grow, hi + grow] along the first ``axes`` axes (grow < 0 shrinks)."""
+        inside = int(1)
+        for ax in range(axes):
+            if x[ax] < lo[ax] - grow or x[ax] > hi[ax] + grow:
+                inside = 0
+        return inside == 1
+
+    @wp.func
+    def in_solid(p: Params, x: vec, solid_lo: wp.array(dtype=vec), solid_hi: wp.array(dtype=vec),
+                 grow: scalar) -> bool:
+        """Whether x lies in one of the solid boxes, each grown by ``grow``."""
+        hit = int(0)
+        for k in range(p.n_solids):
+            if in_box(x, solid_lo[k], solid_hi[k], grow, p.dim):
+                hit = 1
+        return hit == 1
+
+    @wp.func
     def fault(p: Params, x: vec, x_before: vec, u: vec, r: scalar, t: int, solid_lo: wp.array(dtype=vec),
               solid_hi: wp.array(dtype=vec)) -> int:
         """The first of REASONS a particle of the candidate state fails (x_before its committed
         position), or -1."""
         if wp.isnan(x) or wp.isinf(x) or wp.isnan(u) or wp.isinf(u) or wp.isnan(r) or wp.isinf(r):
             return NON_FINITE
-        reason = int(-1)
-        if t == FLUID:
-            for ax in range(3):
-                if reason < 0 and (x[ax] < p.lo[ax] or x[ax] > p.hi[ax]):
-                    reason = OUTSIDE_DOMAIN
-            if reason < 0 and (r < p.rho_min or r > p.rho_max):
-                reason = DENSITY_BOUNDS
-            for ax in range(3):
-                if reason < 0 and (x[ax] < p.wall_lo[ax] - p.penetration or x[ax] > p.wall_hi[ax] + p.penetration):
-                    reason = WALL_PENETRATION
-            for k in range(p.n_solids):
-                lo = solid_lo[k]
-                hi = solid_hi[k]
-                outside = int(0)
-                for ax in range(p.dim):
-                    if x[ax] <= lo[ax] + p.penetration or x[ax] >= hi[ax] - p.penetration:
-                        outside = 1
-                if reason < 0 and outside == 0:
-                    reason = WALL_PENETRATION
-            d = x - x_before
-            for ax in range(3):
-                if p.periodic[ax] != 0:  # a particle that wrapped moved by the minimum image
-                    span = p.hi[ax] - p.lo[ax]
-                    d[ax] = d[ax] - span * wp.round(d[ax] / span)
-            if reason < 0 and wp.dot(d, d) > p.move_limit2:
-                reason = DISPLACEMENT
-        elif r < p.rho_min or r > p.rho_max:
-            reason = DENSITY_BOUNDS
-        return reason
+        bad_density = r < p.rho_min or r > p.rho_max
+        if t != FLUID:
+            if bad_density:
+                return DENSITY_BOUNDS
+            return -1
+        if not in_box(x, p.lo, p.hi, scalar(0.0), 3):
+            return OUTSIDE_DOMAIN
+        if bad_density:
+            return DENSITY_BOUNDS
+        # beyond a tank wall face, or as deep inside a solid
+        if not in_box(x, p.wall_lo, p.wall_hi, p.penetration, 3) or in_solid(p, x, solid_lo, solid_hi,
+                                                                              -p.penetration):
+            return WALL_PENETRATION
+        d = x - x_before
+        for ax in range(3):
+            if p.periodic[ax] != 0:  # a particle that wrapped moved by the minimum image
+                span = p.hi[ax] - p.lo[ax]
+                d[ax] = d[ax] - span * wp.round(d[ax] / span)
+        if wp.dot(d, d) > p.move_limit2:
+            return DISPLACEMENT
+        return -1
 
     @wp.kernel(enable_backward=False, module="unique")
     def check_particles(p: Params, pos: wp.array(dtype=vec), pos_c: wp.array(dtype=vec), vel_c: wp.array(dtype=vec),
@@ -175,19 +186,8 @@ def build(scalar):
     @wp.func
     def near_wall(p: Params, x: vec, solid_lo: wp.array(dtype=vec), solid_hi: wp.array(dtype=vec)) -> bool:
         """Whether x lies within p.clump_wall of a tank wall face or of a solid box."""
-        m = p.clump_wall
-        near = int(0)
-        for ax in range(p.dim):
-            if x[ax] < p.wall_lo[ax] + m or x[ax] > p.wall_hi[ax] - m:
-                near = 1
-        for k in range(p.n_solids):
-            inside = int(1)
-            for ax in range(p.dim):
-                if x[ax] < solid_lo[k][ax] - m or x[ax] > solid_hi[k][ax] + m:
-                    inside = 0
-            if inside == 1:
-                near = 1
-        return near == 1
+        return not in_box(x, p.wall_lo, p.wall_hi, -p.clump_wall, p.dim) or in_solid(p, x, solid_lo, solid_hi,
+                                                                                       p.clump_wall)
 
     @wp.kernel(enable_backward=False, module="unique")
     def census(p: Params, pos: wp.array(dtype=vec), vel: wp.array(dtype=vec), rho: wp.array(dtype=scalar),
