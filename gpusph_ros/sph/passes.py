@@ -56,20 +56,22 @@ def _force_passes(scalar):
 
     @wp.func
     def pair(p: Params, f: Fields, a: int, b: int, r_ab: vec):
-        """What particle b does to fluid particle a: (acceleration, drho/dt, XSPH velocity, |mu|).
+        """What particle b does to fluid particle a: (acceleration, drho/dt, XSPH velocity, |mu|,
+        grad_a W_ab), the kernel gradient zero beyond the support and for walls whose particles carry
+        no fluid volume (Lennard-Jones, Monaghan-Kajtar).
 
         Only the fields a model needs are loaded: the pair loop is where the time goes.
         """
         zero = vec(scalar(0.0))
         r = wp.length(r_ab)
         if r >= scalar(2.0) * p.h:
-            return zero, scalar(0.0), zero, scalar(0.0)
+            return zero, scalar(0.0), zero, scalar(0.0), zero
         t_b = f.ptype[b]
         if t_b == BOUNDARY and p.boundary != DYNAMIC:
             if p.boundary == LENNARD_JONES:
-                return lennard_jones(p.lj_d, p.lj_r0, r_ab, r), scalar(0.0), zero, scalar(0.0)
+                return lennard_jones(p.lj_d, p.lj_r0, r_ab, r), scalar(0.0), zero, scalar(0.0), zero
             return (monaghan_kajtar(p.mk_k, p.mk_beta, p.inv_h, f.mass[a], f.mass[b], r_ab, r), scalar(0.0), zero,
-                    scalar(0.0))
+                    scalar(0.0), zero)
         m_b = f.mass[b]
         rho_a = f.rho[a]
         rho_b = f.rho[b]
@@ -92,7 +94,7 @@ def _force_passes(scalar):
         if t_b == FLUID and p.xsph_eps > scalar(0.0):
             xsph = xsph_velocity(p.xsph_eps, m_b, rho_a, rho_b, kernel_w(p.kernel, p.norm, p.inv_h, r), u_ab)
         mu = wp.abs(wp.dot(u_ab, r_ab)) / r2_eta
-        return acc, drho, xsph, mu
+        return acc, drho, xsph, mu, grad
 
     @wp.func
     def track_max(maxima: wp.array(dtype=scalar), k: int, value: scalar):
@@ -154,18 +156,15 @@ def _force_passes(scalar):
                 r_ij = separation(grid, xi, f.pos[j])
                 if f.ptype[j] == FLUID and wp.dot(r_ij, r_ij) < p.clump_r * p.clump_r:
                     close = 1
-                da, ddr, dxs, mu = pair(p, f, i, j, r_ij)
+                da, ddr, dxs, mu, grad = pair(p, f, i, j, r_ij)
                 a += da
                 dr += ddr
                 xs += dxs
                 mu_max = wp.max(mu_max, mu)
-                if p.shift_a_h != scalar(0.0) and (f.ptype[j] == FLUID or p.boundary == DYNAMIC):
-                    r = wp.length(r_ij)
-                    if r < scalar(2.0) * p.h:
-                        dc, ddiv = concentration_terms(f.mass[j] / f.rho[j], r_ij,
-                                                       r_ij * grad_factor(p.kernel, p.norm, p.inv_h, r))
-                        grad_c += dc
-                        div_r += ddiv
+                if p.shift_a_h != scalar(0.0):  # grad is zero for walls without fluid volume
+                    dc, ddiv = concentration_terms(f.mass[j] / f.rho[j], r_ij, grad)
+                    grad_c += dc
+                    div_r += ddiv
             if p.n_planes > 0:
                 ui = f.vel[i]
                 rho_i = f.rho[i]
@@ -191,7 +190,7 @@ def _force_passes(scalar):
                         grad = -r_ji * grad_factor(p.kernel, p.norm, p.inv_h, r)
                         dr += continuity(f.mass[j], ui - f.vel[j], grad)
                     if f.body[i] >= 0:
-                        da, ddr, dxs, mu = pair(p, f, j, i, r_ji)
+                        da, ddr, dxs, mu, grad = pair(p, f, j, i, r_ji)
                         a -= f.mass[j] / f.mass[i] * da
         acc[i] = a
         drho[i] = dr
