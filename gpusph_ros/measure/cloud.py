@@ -3,8 +3,9 @@
 One row per particle in scene order (the order the scene built them: fluid first, then boundary;
 the solver keeps its arrays sorted into cells), excluded particles left out, columns x, y, z and
 then the chosen fields. One kernel writes the rows into a device buffer, which on a GPU is copied
-into one reusable host buffer; on the CPU the device buffer is the host buffer. No per-particle Python, no float64
-round trip: the copy off the device is the only pass over the data before serialisation.
+into one reusable host buffer; on the CPU the device buffer is the host buffer. No per-particle
+Python, no float64 round trip: the copy off the device is the only pass over the data before
+serialisation.
 """
 import functools
 

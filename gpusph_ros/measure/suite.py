@@ -1,6 +1,7 @@
 """Every measurement a scene asks for, taken together at an output step: point, profile, gauge
-and pressure-sensor probes (one interpolation launch for all their points), depth-averaged columns, the wrench
-on each obstacle and its pressure-block force. Computed on the solver's device; only the results
+and pressure-sensor probes (one interpolation launch for all their points and the obstacles' face
+points), depth-averaged columns, the wrench on each obstacle, its pressure-block force and the
+load of the wall pressure over its faces. Computed on the solver's device; only the results
 come to the host."""
 import numpy as np
 
@@ -34,11 +35,17 @@ class Measurements:
                 continue
             self._slices[probe.name] = (len(points), len(points) + len(pts), pts)
             points.extend(pts)
-        # each obstacle's faces, for its load from the wall pressure (sensors.py)
-        self._faces = {}
+        # each obstacle: its wrench, its pressure blocks, and its faces for the load from the wall
+        # pressure (sensors.py), whose points join the probes' interpolation
+        self._wrenches, self._blocks, self._faces = {}, {}, {}
         for obstacle in scene.obstacles:
+            centre = 0.5 * (np.asarray(obstacle.lo) + np.asarray(obstacle.hi))
+            if dim == 2:
+                centre[2] = 0.0
+            self._wrenches[obstacle.name] = BodyWrench(solver, model.bodies[obstacle.name], centre)
+            self._blocks[obstacle.name] = PressureBlockForce(solver, obstacle.lo, obstacle.hi, obstacle.block_offsets)
             pts, normals, areas = face_load_points(obstacle.lo, obstacle.hi, cfg.dx, dim, scene.tank)
-            self._faces[obstacle.name] = (len(points), pts, normals, areas)
+            self._faces[obstacle.name] = (len(points), pts, normals, areas, centre)
             points.extend(pts + OFFSET_H * cfg.h * normals)
         self._points = PointProbes(solver, points) if points else None
         self._wall = (cfg.h, cfg.rho0, cfg.gravity)
@@ -46,14 +53,6 @@ class Measurements:
         self._column_names = [p.name for p in columns]
         self._columns = (ColumnMeans(solver, [p.position for p in columns], [p.radius_dx * cfg.dx for p in columns])
                          if columns else None)
-        self._wrenches, self._blocks, self._centres = {}, {}, {}
-        for obstacle in scene.obstacles:
-            centre = 0.5 * (np.asarray(obstacle.lo) + np.asarray(obstacle.hi))
-            if dim == 2:
-                centre[2] = 0.0
-            self._centres[obstacle.name] = centre
-            self._wrenches[obstacle.name] = BodyWrench(solver, model.bodies[obstacle.name], centre)
-            self._blocks[obstacle.name] = PressureBlockForce(solver, obstacle.lo, obstacle.hi, obstacle.block_offsets)
 
     def sample(self) -> dict:
         """{"points": {name: {vel, pressure, rho}}, "profiles": {name: {heights, vel}},
@@ -78,10 +77,10 @@ class Measurements:
                                                                probe.normal, *self._wall)
                 else:
                     out["gauges"][probe.name] = elevation(pts[:, up], values["weight"][a:b])
-            for name, (a, pts, normals, areas) in self._faces.items():
+            for name, (a, pts, normals, areas, centre) in self._faces.items():
                 b = a + len(pts)
                 p_face = face_pressure(values["pressure"][a:b], values["weight"][a:b], normals, *self._wall)
-                out["pressure_loads"][name] = face_load(p_face, pts, normals, areas, self._centres[name])
+                out["pressure_loads"][name] = face_load(p_face, pts, normals, areas, centre)
         if self._columns is not None:
             values = self._columns.sample()
             for k, name in enumerate(self._column_names):
