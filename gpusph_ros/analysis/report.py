@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from ..output.messages import block_topic
 from . import metrics as M
 from . import reference as R
 from .bag import read
@@ -78,33 +79,26 @@ def dambreak1(rec, meta, data, scenario, dx, same_case):
     f_exp_peak = R.experiment_value(data, "dambreak1", "peak_force_on_obstruction")
     body = next(iter(meta.get("bodies") or {"obstruction": 0}))
     forces = {}
-    for offset, key, table in ((0.0, "peak_force_at_wall", "dambreak1_peak_force_at_wall.csv"),
-                               (0.06, "peak_force_0p06m", "dambreak1_peak_force_0p06m.csv")):
-        tf, f = M.moving_average(*_x(rec.topic(f"bodies/{body}/pressure_blocks/d{int(round(offset * 1000)):03d}mm"),
-                                     "force"))
+
+    def force(key, topic, gpusph=None, rms_key=None, rms_gpusph=None, note=""):
+        """The peak of one force series on the obstruction (0.04 s average, aligned to the
+        measured peak for the curves) and, with ``rms_key``, its RMS error against the measurement."""
+        tf, f = M.moving_average(*_x(rec.topic(topic), "force"))
         forces[key] = (M.align_to(tf, f, f_ref), f)
-        out.append(_metric(key, M.peak(tf, f)[1], f_exp_peak, gp(table, "peak_force_N")))
-    if exp_f:
-        tf, f = forces["peak_force_0p06m"]
-        out.append(_metric("force_rms_0p06m", M.rms_error(tf, f, *exp_f), None,
-                           gp("dambreak1_force_rms_0p06m.csv", "rms_error_N"), note="experimental scatter 1.50 N"))
-    tb, fb = M.moving_average(*_x(rec.topic(f"bodies/{body}/wrench"), "force"))
-    forces["peak_force_body"] = (M.align_to(tb, fb, f_ref), fb)
-    out.append(_metric("peak_force_body", M.peak(tb, fb)[1], f_exp_peak, note="no GPUSPH counterpart in the thesis"))
-    if exp_f:
-        out.append(_metric("force_rms_body", M.rms_error(*forces["peak_force_body"], *exp_f),
-                           note="experimental scatter 1.50 N"))
-    try:  # recordings from before the wall-pressure load lack it
-        tw, fw = M.moving_average(*_x(rec.topic(f"bodies/{body}/pressure_load"), "force"))
-    except KeyError:
-        tw = None
-    if tw is not None:
-        forces["peak_force_pressure_load"] = (M.align_to(tw, fw, f_ref), fw)
-        out.append(_metric("peak_force_pressure_load", M.peak(tw, fw)[1], f_exp_peak,
-                           note="no GPUSPH counterpart in the thesis"))
-        if exp_f:
-            out.append(_metric("force_rms_pressure_load", M.rms_error(*forces["peak_force_pressure_load"], *exp_f),
+        out.append(_metric(key, M.peak(tf, f)[1], f_exp_peak, gpusph, note=note))
+        if rms_key and exp_f:
+            out.append(_metric(rms_key, M.rms_error(*forces[key], *exp_f), None, rms_gpusph,
                                note="experimental scatter 1.50 N"))
+
+    blocks = f"bodies/{body}/pressure_blocks"
+    force("peak_force_at_wall", f"{blocks}/{block_topic(0.0)}", gp("dambreak1_peak_force_at_wall.csv", "peak_force_N"))
+    force("peak_force_0p06m", f"{blocks}/{block_topic(0.06)}", gp("dambreak1_peak_force_0p06m.csv", "peak_force_N"),
+          "force_rms_0p06m", gp("dambreak1_force_rms_0p06m.csv", "rms_error_N"))
+    force("peak_force_body", f"bodies/{body}/wrench", rms_key="force_rms_body",
+          note="no GPUSPH counterpart in the thesis")
+    if any(name.endswith(f"bodies/{body}/pressure_load") for name in rec.series):  # newer recordings only
+        force("peak_force_pressure_load", f"bodies/{body}/pressure_load", rms_key="force_rms_pressure_load",
+              note="no GPUSPH counterpart in the thesis")
     curves["force"] = (forces, exp_f)
     td, ud = M.moving_average(*_x(rec.topic("probes/D")))
     fr = M.forward_return(td, ud)
