@@ -6,8 +6,8 @@ Settling: for the first 0.4 s velocities relax with a 0.02 s time constant, so t
 force-based walls (which bounces on them like a spring) comes to rest; then the tank runs free
 for 0.2 s and the pressure is averaged over 10 samples in the last 0.4 s.
 
-Reference: hydrostatics, p = rho0 g d. Walls: Crespo et al. 2007 (dynamic), Monaghan 1994
-(Lennard-Jones), Monaghan & Kajtar 2009, particle-less planes.
+Reference: hydrostatics, p = rho0 g d. Walls: Crespo et al. 2007 (dynamic), English et al. 2021
+(mdbc), Monaghan 1994 (Lennard-Jones), Monaghan & Kajtar 2009, particle-less planes.
 """
 import numpy as np
 import pytest
@@ -40,7 +40,8 @@ def tank(dim, boundary, walls, precision):
 CASES = [(dim, boundary, "particles", "float32") for dim in (2, 3)
          for boundary in ("dynamic", "lennard_jones", "monaghan_kajtar")]
 CASES += [(2, "dynamic", "planes", "float32"), (3, "dynamic", "planes", "float32"),
-          (2, "dynamic", "particles", "float64")]
+          (2, "dynamic", "particles", "float64"), (2, "mdbc", "particles", "float64"),
+          (3, "mdbc", "particles", "float32")]
 
 
 @pytest.mark.parametrize("dim, boundary, walls, precision", CASES)

@@ -17,17 +17,25 @@ it (u.n = 0, so the fluid's normal acceleration is the wall's, zero) leaves
 exact for hydrostatics (a floor sensor's 1.5 h of water added back; nothing on a side wall) and
 first order in delta during an impact. Points of the face outside the tank are dropped (a sensor
 at 3 mm on a wall sampled 4.5 mm across); a dry point reads 0 (atmospheric). A sensor reads the
-mean over its face's points (``wall_pressure``).
+mean over its face's points.
 
 A box body's load from the wall pressure (``face_load_points``, ``face_load``): each face the fluid
 can reach (not one lying on a tank wall or the floor) tiled in cells dx/2 across, the wall pressure
 at each cell's centre as above, F = -sum p n dA and T = sum (x - c) x (-p n dA) about the centre c;
 in 2D per unit depth. This is what a load cell behind a rigid face reads of the pressure, without
 the boundary particles' own noise that the net force on them carries (forces.py).
+
+Under mDBC (mdbc.py) the wall's own pressure is usable and no offset is needed: each face point
+reads the boundary's pressure, mDBC's first-order extrapolation of the fluid from the ghost node of
+the first boundary layer (dx/2 in front of the face) evaluated at the face (``WallPressure``).
 """
 import math
 
 import numpy as np
+import warp as wp
+
+from ..sph import mdbc
+from .probes import PointProbes
 
 OFFSET_H = 1.5  # [h] the interpolation points' distance in front of the face
 
@@ -55,12 +63,6 @@ def face_points(position, normal, diameter: float, dx: float, dim: int, tank) ->
     return pts[keep] if keep.any() else c[None, :]
 
 
-def sensor_points(probe, h: float, dx: float, dim: int, tank) -> np.ndarray:
-    """Where the sensor's pressure is interpolated: its face moved OFFSET_H h into the fluid."""
-    return face_points(probe.position, probe.normal, probe.diameter, dx, dim, tank) \
-        + OFFSET_H * h * np.asarray(probe.normal, dtype=np.float64)
-
-
 def face_pressure(pressure, weight, normal, h: float, rho0: float, gravity) -> np.ndarray:
     """The pressure on the face at each point, from the ``pressure`` interpolated OFFSET_H h in
     front of it (and the kernel ``weight`` there, 0 where dry); ``normal``: one for all points, or
@@ -69,9 +71,37 @@ def face_pressure(pressure, weight, normal, h: float, rho0: float, gravity) -> n
     return np.where(np.asarray(weight) > 0.0, np.asarray(pressure) - drop, 0.0)  # p_wall = p - rho0 (g.n) delta
 
 
-def wall_pressure(pressure, weight, normal, h: float, rho0: float, gravity) -> float:
-    """A sensor's reading: the mean of face_pressure over its face."""
-    return float(np.mean(face_pressure(pressure, weight, normal, h, rho0, gravity)))
+class WallPressure:
+    """The pressure on wall faces at fixed points (n x 3) with their inward normals (n x 3), in the
+    way right for the solver's boundary model (see the module docstring); ``sample()`` returns the
+    pressure at each point, 0 where dry."""
+
+    def __init__(self, solver, points, normals):
+        cfg = solver.config
+        self.solver = solver
+        self.points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        self.normals = np.asarray(normals, dtype=np.float64).reshape(-1, 3)
+        self._wall = (cfg.h, cfg.rho0, cfg.gravity)
+        if cfg.boundary == "mdbc":
+            dev, n = solver.device, len(self.points)
+            self._kernel = mdbc.build(solver.scalar).face_pressure
+            self._pts = wp.array(self.points, dtype=solver.vec, device=dev)
+            self._nrm = wp.array(self.normals, dtype=solver.vec, device=dev)
+            self._pressure = wp.zeros(n, dtype=solver.scalar, device=dev)
+            self._weight = wp.zeros(n, dtype=solver.scalar, device=dev)
+            self._probes = None
+        else:
+            self._probes = PointProbes(solver, self.points + OFFSET_H * cfg.h * self.normals)
+
+    def sample(self) -> np.ndarray:
+        if self._probes is not None:
+            values = self._probes.sample()
+            return face_pressure(values["pressure"], values["weight"], self.normals, *self._wall)
+        params, fields, nl = self.solver.measurement_view()
+        wp.launch(self._kernel, dim=len(self.points),
+                  inputs=[params, nl.grid, nl.cell_start, nl.cell_end, nl.order, fields, self._pts, self._nrm,
+                          self.solver.config.dx, self._pressure, self._weight], device=self.solver.device)
+        return np.where(self._weight.numpy() > 0.0, self._pressure.numpy().astype(np.float64), 0.0)
 
 
 def face_load_points(lo, hi, dx: float, dim: int, tank):

@@ -1,15 +1,15 @@
-"""Every measurement a scene asks for, taken together at an output step: point, profile, gauge
-and pressure-sensor probes (one interpolation launch for all their points and the obstacles' face
-points), depth-averaged columns, the wrench on each obstacle, its pressure-block force and the
-load of the wall pressure over its faces. Computed on the solver's device; only the results
-come to the host."""
+"""Every measurement a scene asks for, taken together at an output step: point, profile and gauge
+probes (one interpolation launch for all their points), pressure sensors and the obstacles' faces
+(one wall-pressure launch, sensors.WallPressure), depth-averaged columns, the wrench on each
+obstacle, its pressure-block force and the load of the wall pressure over its faces. Computed on
+the solver's device; only the results come to the host."""
 import numpy as np
 
 from .blocks import PressureBlockForce
 from .columns import ColumnMeans
 from .forces import BodyWrench
 from .probes import PointProbes
-from .sensors import OFFSET_H, face_load, face_load_points, face_pressure, sensor_points, wall_pressure
+from .sensors import WallPressure, face_load, face_load_points, face_points
 from .surface import elevation, gauge_points
 
 
@@ -21,6 +21,8 @@ class Measurements:
         dim, up = cfg.dim, cfg.dim - 1
         self.scene = scene
         points, self._slices = [], {}
+        # points on wall and body faces, read by WallPressure: the sensors' and the obstacles' faces
+        wall, wall_normals, self._sensors = [], [], {}
         for probe in scene.probes:
             if probe.type == "point":
                 pts = np.asarray([probe.position])
@@ -30,13 +32,17 @@ class Measurements:
             elif probe.type == "gauge":
                 pts = gauge_points(probe.position, scene.tank[up], cfg.dx, dim)
             elif probe.type == "pressure_sensor":
-                pts = sensor_points(probe, cfg.h, cfg.dx, dim, scene.tank)
+                pts = face_points(probe.position, probe.normal, probe.diameter, cfg.dx, dim, scene.tank)
+                self._sensors[probe.name] = (len(wall), len(wall) + len(pts))
+                wall.extend(pts)
+                wall_normals.extend([probe.normal] * len(pts))
+                continue
             else:
                 continue
             self._slices[probe.name] = (len(points), len(points) + len(pts), pts)
             points.extend(pts)
         # each obstacle: its wrench, its pressure blocks, and its faces for the load from the wall
-        # pressure (sensors.py), whose points join the probes' interpolation
+        # pressure (sensors.py)
         self._wrenches, self._blocks, self._faces = {}, {}, {}
         for obstacle in scene.obstacles:
             centre = 0.5 * (np.asarray(obstacle.lo) + np.asarray(obstacle.hi))
@@ -45,10 +51,11 @@ class Measurements:
             self._wrenches[obstacle.name] = BodyWrench(solver, model.bodies[obstacle.name], centre)
             self._blocks[obstacle.name] = PressureBlockForce(solver, obstacle.lo, obstacle.hi, obstacle.block_offsets)
             pts, normals, areas = face_load_points(obstacle.lo, obstacle.hi, cfg.dx, dim, scene.tank)
-            self._faces[obstacle.name] = (len(points), pts, normals, areas, centre)
-            points.extend(pts + OFFSET_H * cfg.h * normals)
+            self._faces[obstacle.name] = (len(wall), pts, normals, areas, centre)
+            wall.extend(pts)
+            wall_normals.extend(normals)
         self._points = PointProbes(solver, points) if points else None
-        self._wall = (cfg.h, cfg.rho0, cfg.gravity)
+        self._wall = WallPressure(solver, wall, wall_normals) if wall else None
         columns = [p for p in scene.probes if p.type == "column"]
         self._column_names = [p.name for p in columns]
         self._columns = (ColumnMeans(solver, [p.position for p in columns], [p.radius_dx * cfg.dx for p in columns])
@@ -72,15 +79,14 @@ class Measurements:
                     out["points"][probe.name] = {k: values[k][a] for k in ("vel", "pressure", "rho")}
                 elif probe.type == "profile":
                     out["profiles"][probe.name] = {"heights": pts[:, up], "vel": values["vel"][a:b]}
-                elif probe.type == "pressure_sensor":
-                    out["sensors"][probe.name] = wall_pressure(values["pressure"][a:b], values["weight"][a:b],
-                                                               probe.normal, *self._wall)
                 else:
                     out["gauges"][probe.name] = elevation(pts[:, up], values["weight"][a:b])
+        if self._wall is not None:
+            p_wall = self._wall.sample()
+            for name, (a, b) in self._sensors.items():
+                out["sensors"][name] = float(np.mean(p_wall[a:b]))  # the transducer: its face's mean
             for name, (a, pts, normals, areas, centre) in self._faces.items():
-                b = a + len(pts)
-                p_face = face_pressure(values["pressure"][a:b], values["weight"][a:b], normals, *self._wall)
-                out["pressure_loads"][name] = face_load(p_face, pts, normals, areas, centre)
+                out["pressure_loads"][name] = face_load(p_wall[a:a + len(pts)], pts, normals, areas, centre)
         if self._columns is not None:
             values = self._columns.sample()
             for k, name in enumerate(self._column_names):

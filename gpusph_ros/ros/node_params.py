@@ -14,7 +14,7 @@ from ..output.recording import folder_problem
 from ..scenes.reduce import MODELS
 from ..scenes.schema import builtin_names, load_scene
 from ..scenes.settings import resolve
-from ..sph.config import BOUNDARIES, DENSITY_DIFFUSIONS, KERNELS, PRECISIONS, ConfigError
+from ..sph.config import BOUNDARIES, DENSITY_DIFFUSIONS, KERNELS, MDBC_SLIPS, PRECISIONS, ConfigError
 
 # when a change takes effect
 RESET = "reset"  # needs new particles or buffers: at the next ~/reset
@@ -47,8 +47,11 @@ PARAMS = (
           "(Morris 1997, thesis Eq. 2.16-2.17)", LIVE, choices=VISCOSITY_CHOICES),
     Param("sps", False, "add the sub-particle-scale turbulence stress to laminar viscosity (Dalrymple & Rogers "
           "2006, thesis Eq. 2.18-2.21); needs viscosity laminar", LIVE),
-    Param("boundary", "dynamic", "boundary particle model for walls the scene builds of particles", RESET,
-          choices=BOUNDARIES),
+    Param("boundary", "dynamic", "boundary particle model for walls the scene builds of particles: dynamic "
+          "(Crespo et al. 2007), mdbc (English et al. 2021), lennard_jones (thesis Eq. 2.24), monaghan_kajtar "
+          "(Eq. 2.26)", RESET, choices=BOUNDARIES),
+    Param("mdbc_slip", "none", "boundary velocity under mdbc: none (the wall's, zero), no_slip or free_slip", LIVE,
+          choices=MDBC_SLIPS),
     Param("density_diffusion", "delta", "density treatment: none, or delta-SPH (Molteni & Colagrossi 2009)", LIVE,
           choices=DENSITY_DIFFUSIONS),
     Param("model", "full", "how the scene is modelled: full, slab (a thin periodic slab across y) or 2d (the x-z "
@@ -83,8 +86,9 @@ DEFAULTS = {p.name: p.default for p in PARAMS}
 # numerics (Solver.reconfigure), the run's outputs (Run.set_output), the cloud (Run.set_cloud) or
 # the node's pacing. A LIVE parameter comes to the settings of the same name, except those below.
 LIVE_SETTINGS = {"kernel": "solver", "viscosity": "solver", "density_diffusion": "solver", "cfl": "solver",
-                 "c0": "solver", "max_excluded_fraction": "solver", "end_time": "output", "output_rate": "output",
-                 "particle_rate": "output", "particle_fields": "cloud", "frame_id": "cloud", "real_time_factor": "pace"}
+                 "c0": "solver", "max_excluded_fraction": "solver", "mdbc_slip": "solver", "end_time": "output",
+                 "output_rate": "output", "particle_rate": "output", "particle_fields": "cloud", "frame_id": "cloud",
+                 "real_time_factor": "pace"}
 _SETTINGS_OF = {"sps": ("viscosity",), "publish_particles": ("particle_rate",)}
 
 
@@ -157,7 +161,7 @@ def run_settings(values: dict):
     scene = load_scene(values["scene"])
     output = {k: values[k] for k in ("end_time", "output_rate") if values[k] > 0.0}
     numerics = {k: values[k] for k in ("dx", "kernel", "boundary", "density_diffusion", "precision", "device",
-                                       "cfl", "c0", "max_excluded_fraction")}
+                                       "cfl", "c0", "max_excluded_fraction", "mdbc_slip")}
     numerics["viscosity"] = "sps" if values["sps"] else values["viscosity"]
     reduction = {k: values[k] for k in ("model", "crop", "wall_planes")}
     # the node's clouds follow output_rate

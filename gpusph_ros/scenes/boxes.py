@@ -136,8 +136,8 @@ def beyond_faces(pts, hi, dim: int, faces) -> np.ndarray:
 
 
 def boundary_layers(boundary: str, hdx: float) -> int:
-    """Dynamic boundaries need a full kernel support of particles; force-based ones one layer."""
-    return int(np.ceil(2.0 * hdx)) if boundary == "dynamic" else 1
+    """Dynamic boundaries (and mDBC) need a full kernel support of particles; force-based ones one layer."""
+    return int(np.ceil(2.0 * hdx)) if boundary in ("dynamic", "mdbc") else 1
 
 
 def box_tank(cfg: SolverConfig, tank, fluid_boxes, walls="particles", headroom: float = 0.5):
@@ -170,7 +170,7 @@ def box_tank(cfg: SolverConfig, tank, fluid_boxes, walls="particles", headroom: 
     wall = np.zeros((0, 3))
     if len(plane_faces) < len(kinds):
         layers = boundary_layers(cfg.boundary, cfg.hdx)
-        if cfg.boundary == "dynamic":
+        if cfg.boundary in ("dynamic", "mdbc"):
             wall = wall_particles(tank, dx, dim, layers, periodic)
         else:
             spacing = dx / cfg.mk_beta if cfg.boundary == "monaghan_kajtar" else dx

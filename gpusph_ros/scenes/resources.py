@@ -16,7 +16,7 @@ from ..sph.solver import default_max_neighbours
 from .boxes import boundary_layers
 
 HOST_BYTES = 200  # numpy arrays of the particle set and the lattice fills, per particle
-_SCALARS, _INTEGER_BYTES = 54, 68
+_SCALARS, _INTEGER_BYTES = 60, 68
 USABLE = 0.9  # of the free memory a run may plan to take
 
 

@@ -14,6 +14,9 @@
 - dynamic: Crespo et al. 2007 (the DualSPHysics default). Boundary particles obey the
   continuity equation and the equation of state but never move; the fluid sees them through the
   ordinary pressure and viscous terms. No function here: the pair terms are the fluid ones.
+- mdbc: English et al. 2021, the modified dynamic boundary: the same particles and pair terms,
+  but each boundary particle's density is extrapolated from the fluid at its mirror image across
+  the wall (mdbc.py) instead of integrated by the continuity equation.
 - planes (particle-less walls, given by a point and an inward normal): the fluid's own kernel
   sums are completed by the mirror image of the fluid across the wall, integrated analytically
   over the half-space behind it. With Gamma'(d) = the kernel integrated over the wall plane at
@@ -33,7 +36,8 @@ import warp as wp
 
 from . import kernels
 
-BOUNDARY_ID = {"lennard_jones": 0, "monaghan_kajtar": 1, "dynamic": 2}
+# ids >= DYNAMIC are walls of particles that carry a density and a fluid volume
+BOUNDARY_ID = {"lennard_jones": 0, "monaghan_kajtar": 1, "dynamic": 2, "mdbc": 3}
 WENDLAND = kernels.WENDLAND
 
 

@@ -13,7 +13,8 @@ from dataclasses import dataclass, field
 
 KERNELS = ("quadratic", "cubic_spline", "wendland")
 VISCOSITIES = ("artificial", "laminar", "sps")
-BOUNDARIES = ("lennard_jones", "monaghan_kajtar", "dynamic")
+BOUNDARIES = ("lennard_jones", "monaghan_kajtar", "dynamic", "mdbc")
+MDBC_SLIPS = ("none", "no_slip", "free_slip")
 DENSITY_DIFFUSIONS = ("none", "delta")
 PRECISIONS = ("float32", "float64")
 
@@ -81,6 +82,7 @@ class SolverConfig:
     sps_cs: float = 0.12  # Smagorinsky constant (thesis Eq. 2.20)
     sps_ci: float = 6.6e-3  # isotropic SPS coefficient C_I (thesis Eq. 2.19)
     boundary: str = "dynamic"
+    mdbc_slip: str = "none"  # mdbc.py: the boundary velocity under mDBC (DualSPHysics SlipMode)
     mk_beta: float = 2.0  # fluid / boundary particle spacing ratio (thesis Eq. 2.26), >= 1
     density_diffusion: str = "delta"
     delta: float = 0.1  # delta-SPH coefficient (Molteni & Colagrossi 2009)
@@ -189,6 +191,7 @@ class SolverConfig:
         choice("kernel", KERNELS)
         choice("viscosity", VISCOSITIES)
         choice("boundary", BOUNDARIES)
+        choice("mdbc_slip", MDBC_SLIPS)
         choice("density_diffusion", DENSITY_DIFFUSIONS)
         choice("precision", PRECISIONS)
         for name in ("dx", "hdx", "rho0", "gamma", "depth", "cfl", "c0_coef", "xsph_eps", "mk_beta"):

@@ -139,8 +139,10 @@ def build(scalar):
                        order: wp.array(dtype=wp.int32), start: wp.array(dtype=wp.int32),
                        end: wp.array(dtype=wp.int32), nbr: wp.array(dtype=wp.int32),
                        count: wp.array(dtype=wp.int32), needs_list: wp.array(dtype=wp.int32),
-                       stale: wp.array(dtype=wp.int32), x_build: wp.array(dtype=vec),
+                       ghost: wp.array(dtype=vec), stale: wp.array(dtype=wp.int32), x_build: wp.array(dtype=vec),
                        overflow: wp.array(dtype=wp.int32), chunk: int, stride: int):
+        """A particle's list: every candidate within the list radius of it or, for a boundary
+        particle with a ghost node (mdbc.py, at ``ghost`` from it; zero otherwise), of that node."""
         # walk particles in cell order, reading the candidates' positions in that order too:
         # the candidates of one cell lie next to each other in memory
         if stale[0] == 0:
@@ -153,12 +155,24 @@ def build(scalar):
             return
         fluid_i = ptype_sorted[ki] == FLUID
         xi = pos_sorted[ki]
+        off = ghost[i]
+        two_centres = wp.dot(off, off) > scalar(0.0)
         ci = cell_coord(grid, xi)
+        reach = wp.vec3i(grid.reach, grid.reach, grid.reach_z)
+        if two_centres:
+            # cells are at least a list radius wide: reach the ghost's list radius as well (on a
+            # periodic axis no further than the cells that are there, each visited once)
+            for ax in range(3):
+                if ax < 2 or grid.reach_z > 0:
+                    r_ax = reach[ax] + int(wp.ceil(wp.abs(off[ax]) * grid.inv_cell[ax]))
+                    if grid.periodic[ax] != 0:
+                        r_ax = wp.min(r_ax, (grid.dims[ax] - 1) / 2)
+                    reach[ax] = r_ax
         n = int(0)
         base = i * grid.max_neighbours
-        for dz in range(-grid.reach_z, grid.reach_z + 1):
-            for dy in range(-grid.reach, grid.reach + 1):
-                for dx in range(-grid.reach, grid.reach + 1):
+        for dz in range(-reach[2], reach[2] + 1):
+            for dy in range(-reach[1], reach[1] + 1):
+                for dx in range(-reach[0], reach[0] + 1):
                     cell = neighbour_cell(grid, ci, dx, dy, dz)
                     if cell >= 0:
                         for k in range(start[cell], end[cell]):
@@ -167,7 +181,11 @@ def build(scalar):
                             t_k = ptype_sorted[k]
                             if k != ki and (t_k == FLUID or (fluid_i and t_k == BOUNDARY)):
                                 r = separation(grid, xi, pos_sorted[k])
-                                if wp.dot(r, r) < grid.radius2:
+                                near = wp.dot(r, r) < grid.radius2
+                                if two_centres and not near:
+                                    rg = r + off
+                                    near = wp.dot(rg, rg) < grid.radius2
+                                if near:
                                     if n < grid.max_neighbours:
                                         nbr[base + n] = order[k]
                                     n += 1
@@ -187,8 +205,9 @@ class NeighbourList:
     SKIN = LIST_SKIN
 
     def __init__(self, scalar, dim: int, support: float, lo, hi, periodic, ptype: wp.array,
-                 needs_list: wp.array, max_neighbours: int, launcher):
-        """``ptype`` and ``needs_list`` are the solver's own device arrays (it may reorder them)."""
+                 needs_list: wp.array, ghost: wp.array, max_neighbours: int, launcher):
+        """``ptype``, ``needs_list`` and ``ghost`` (each particle's ghost-node offset, see
+        neighbour_list) are the solver's own device arrays (it may reorder them)."""
         self._passes = build(scalar)
         Grid = self._passes.Grid
         n = needs_list.shape[0]
@@ -228,6 +247,7 @@ class NeighbourList:
         self.count = wp.zeros(n, dtype=wp.int32, device=device)
         self.overflow = wp.zeros(1, dtype=wp.int32, device=device)
         self._needs_list = needs_list
+        self._ghost = ghost
         self._ptype = ptype
         self._pos_sorted = wp.zeros(n, dtype=wp.types.vector(3, scalar), device=device)
         self._ptype_sorted = wp.zeros(n, dtype=wp.int32, device=device)
@@ -260,7 +280,7 @@ class NeighbourList:
                                                      self._ptype_sorted], device=self.device)
         self.launcher(self._passes.neighbour_list, n, [self.grid, self._pos_sorted, self._ptype_sorted, self._order,
                                                 self._start, self._end, self.nbr, self.count, self._needs_list,
-                                                self.stale, self._x_build, self.overflow])
+                                                self._ghost, self.stale, self._x_build, self.overflow])
         wp.launch(self._passes.mark_built, dim=1, inputs=[self.stale, self.builds], device=self.device)
 
     @property

@@ -24,7 +24,7 @@ from . import boundaries, density, eos, health, kernels, momentum, neighbours, s
 FLUID = state.FLUID
 BOUNDARY = state.BOUNDARY
 EXCLUDED = state.EXCLUDED
-DYNAMIC = boundaries.BOUNDARY_ID["dynamic"]
+DYNAMIC = boundaries.BOUNDARY_ID["dynamic"]  # and mdbc above it: particle walls with a density
 LENNARD_JONES = boundaries.BOUNDARY_ID["lennard_jones"]
 ARTIFICIAL = viscosity.VISCOSITY_ID["artificial"]
 SPS = viscosity.VISCOSITY_ID["sps"]
@@ -67,7 +67,7 @@ def _force_passes(scalar):
         if r >= scalar(2.0) * p.h:
             return zero, scalar(0.0), zero, scalar(0.0), zero
         t_b = f.ptype[b]
-        if t_b == BOUNDARY and p.boundary != DYNAMIC:
+        if t_b == BOUNDARY and p.boundary < DYNAMIC:  # walls without fluid volume
             if p.boundary == LENNARD_JONES:
                 return lennard_jones(p.lj_d, p.lj_r0, r_ab, r), scalar(0.0), zero, scalar(0.0), zero
             return (monaghan_kajtar(p.mk_k, p.mk_beta, p.inv_h, f.mass[a], f.mass[b], r_ab, r), scalar(0.0), zero,
@@ -123,7 +123,7 @@ def _force_passes(scalar):
         base = i * grid.max_neighbours
         for k in range(count[i]):
             j = nbr[base + k]
-            if f.ptype[j] == FLUID or p.boundary == DYNAMIC:
+            if f.ptype[j] == FLUID or p.boundary >= DYNAMIC:
                 r_ab = separation(grid, f.pos[i], f.pos[j])
                 r = wp.length(r_ab)
                 if r < scalar(2.0) * p.h:
@@ -177,9 +177,9 @@ def _force_passes(scalar):
                     dr += ddr
             track_max(maxima, 2 * chunk, wp.length(a))
             track_max(maxima, 2 * chunk + 1, mu_max)
-        else:
-            # a boundary particle: density (dynamic boundaries) and, on a body, the reaction
-            # of every fluid neighbour, so that mass x acc sums to the force on the body
+        elif p.boundary == DYNAMIC or f.body[i] >= 0:
+            # a boundary particle: density (dynamic boundaries; mDBC sets it in mdbc.py) and, on a
+            # body, the reaction of every fluid neighbour, so that mass x acc sums to the force on it
             ui = f.vel[i]
             for k in range(count[i]):
                 j = nbr[base + k]
@@ -207,7 +207,7 @@ def _force_passes(scalar):
         if f.ptype[i] != FLUID:
             rho_out[i] = f.rho[i]
             return
-        rho_out[i] = shepard_density(p.kernel, p.norm, p.inv_h, p.boundary == DYNAMIC, grid, nbr, count, i, f.pos,
+        rho_out[i] = shepard_density(p.kernel, p.norm, p.inv_h, p.boundary >= DYNAMIC, grid, nbr, count, i, f.pos,
                                      f.rho, f.mass, f.ptype)
 
     return SimpleNamespace(equation_of_state=equation_of_state, sps_strain=sps_strain, interact=interact,
@@ -311,9 +311,10 @@ def _time_passes(scalar):
     def permute(order: wp.array(dtype=wp.int32), pos: wp.array(dtype=vec), vel: wp.array(dtype=vec),
                 rho: wp.array(dtype=scalar), mass: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
                 body: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32), needs: wp.array(dtype=wp.int32),
-                pos_o: wp.array(dtype=vec), vel_o: wp.array(dtype=vec), rho_o: wp.array(dtype=scalar),
-                mass_o: wp.array(dtype=scalar), ptype_o: wp.array(dtype=wp.int32), body_o: wp.array(dtype=wp.int32),
-                ids_o: wp.array(dtype=wp.int32), needs_o: wp.array(dtype=wp.int32)):
+                ghost: wp.array(dtype=vec), pos_o: wp.array(dtype=vec), vel_o: wp.array(dtype=vec),
+                rho_o: wp.array(dtype=scalar), mass_o: wp.array(dtype=scalar), ptype_o: wp.array(dtype=wp.int32),
+                body_o: wp.array(dtype=wp.int32), ids_o: wp.array(dtype=wp.int32), needs_o: wp.array(dtype=wp.int32),
+                ghost_o: wp.array(dtype=vec)):
         """Gather the per-particle state into cell order (``order`` from the cell sort)."""
         k = wp.tid()
         i = order[k]
@@ -325,6 +326,7 @@ def _time_passes(scalar):
         body_o[k] = body[i]
         ids_o[k] = ids[i]
         needs_o[k] = needs[i]
+        ghost_o[k] = ghost[i]
 
     @wp.kernel(enable_backward=False, module="unique")
     def tick(fail: wp.array(dtype=wp.int32), clock: wp.array(dtype=wp.float64), steps: wp.array(dtype=wp.int32)):

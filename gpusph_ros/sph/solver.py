@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import warp as wp
 
-from . import boundaries, density, health, kernels, passes, viscosity
+from . import boundaries, density, health, kernels, mdbc, passes, viscosity
 from .config import SolverConfig, check_device
 from .health import HealthError
 from .launch import Launcher
@@ -80,13 +80,14 @@ class Solver:
         if self.n == 0:
             raise ValueError("particles: the particle set is empty")
         self._passes = passes.build(self.scalar)
+        self._mdbc = mdbc.build(self.scalar) if self.config.boundary == "mdbc" else None
         self._fluid_mass = float(particles.mass[particles.ptype == FLUID].sum())
         self.n_fluid = int((particles.ptype == FLUID).sum())
         self.params = self._make_params()
         self.launch = Launcher(self.device, cfg.cpu_threads)
         self._allocate(particles)
         self.neighbours = NeighbourList(self.scalar, cfg.dim, 2.0 * cfg.h, cfg.domain_lo, cfg.domain_hi,
-                                        cfg.periodic, self.ptype, self._needs_list,
+                                        cfg.periodic, self.ptype, self._needs_list, self._ghost,
                                         max_neighbours or default_max_neighbours(cfg.dim, cfg.hdx),
                                         self.launch)
         self._launched = 0
@@ -110,6 +111,7 @@ class Solver:
         p.cs_dl2 = (cfg.sps_cs * cfg.dx) ** 2
         p.ci_dl2 = cfg.sps_ci * cfg.dx ** 2
         p.boundary = boundaries.BOUNDARY_ID[cfg.boundary]
+        p.mdbc_slip = mdbc.SLIP_ID[cfg.mdbc_slip]
         for name, value in boundaries.wall_constants(g, cfg.depth, cfg.dx, cfg.mk_beta, cfg.dim).items():
             setattr(p, name, value)
         p.delta_hc0 = (cfg.delta * cfg.h * cfg.sound_speed
@@ -163,11 +165,13 @@ class Solver:
         self.body = arr(particles.body, wp.int32)
         # the arrays are kept in cell order; ids maps each slot back to the caller's particle
         self.ids = arr(np.arange(n, dtype=np.int32), wp.int32)
-        # boundary particles need their own list only to update their density or sum a body force
-        needs = (particles.ptype == FLUID) | (particles.body >= 0) | (cfg.boundary == "dynamic")
+        # boundary particles need their own list only for their density (dynamic: by continuity;
+        # mDBC: the list holds the fluid near the ghost node too) or to sum a body force
+        needs = (particles.ptype == FLUID) | (particles.body >= 0) | (cfg.boundary in ("dynamic", "mdbc"))
         self._needs_list = arr(needs.astype(np.int32), wp.int32)
+        self._ghost = wp.zeros(n, dtype=v, device=dev)  # mDBC's ghost-node offsets (mdbc.py); else zero
         self._sorted = [wp.empty_like(a) for a in (self.pos, self.vel, self.rho, self.mass, self.ptype, self.body,
-                                                   self.ids, self._needs_list)]
+                                                   self.ids, self._needs_list, self._ghost)]
         self.pressure = wp.zeros(n, dtype=s, device=dev)
         # half-step and candidate states, rates of change
         self._pos_h, self._vel_h, self._rho_h = (wp.zeros_like(a) for a in (self.pos, self.vel, self.rho))
@@ -188,6 +192,9 @@ class Solver:
         solids = cfg.solids or [((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))]
         self._solid_lo = arr(np.asarray([lo for lo, _ in solids], dtype=np.float64), v)
         self._solid_hi = arr(np.asarray([hi for _, hi in solids], dtype=np.float64), v)
+        if self._mdbc is not None:
+            wp.launch(self._mdbc.ghost_offsets, dim=n, inputs=[self.params, self.pos, self.ptype, self.body,
+                                                               self._solid_lo, self._solid_hi, self._ghost], device=dev)
         self._fail = arr(np.full(health.N_CHECKS, health.NO_FAILURE, dtype=np.int32), wp.int32)
         # candidate's energy, energy at the start, the largest clumped fraction seen
         # (health.census_check); clumped fluid particles and the first of them
@@ -222,7 +229,8 @@ class Solver:
                                     self._drho, self._xsph, self._shift, self._maxima, self._clumped])
 
     def _reorder(self):
-        state = [self.pos, self.vel, self.rho, self.mass, self.ptype, self.body, self.ids, self._needs_list]
+        state = [self.pos, self.vel, self.rho, self.mass, self.ptype, self.body, self.ids, self._needs_list,
+                 self._ghost]
         order = self.neighbours.sort(self.pos)
         wp.launch(self._passes.permute, dim=self.n, inputs=[order, *state, *self._sorted], device=self.device)
         for dst, src in zip(state, self._sorted):
@@ -235,6 +243,11 @@ class Solver:
             self._reorder()
         self.neighbours.rebuild(self.pos)
         self._maxima.zero_()
+        if self._mdbc is not None:
+            # once a step, before the first force pass, as DualSPHysics (MdbcCorrector off): the
+            # half step's boundary particles inherit it through the integrator
+            nl = self.neighbours
+            self.launch(self._mdbc.boundary_state, n, [p, nl.grid, nl.nbr, nl.count, self._fields, self._ghost])
         self._forces(self._fields)
         wp.launch(k.choose_dt, dim=1, inputs=[p, t_target, self._maxima, self._fail, self._clock], device=dev)
         wp.launch(k.integrate, dim=n,

@@ -29,6 +29,7 @@ def build(scalar):
         cs_dl2: scalar
         ci_dl2: scalar
         boundary: int
+        mdbc_slip: int  # mdbc.SLIP_ID
         lj_d: scalar
         lj_r0: scalar
         mk_k: scalar
