@@ -32,7 +32,8 @@ def plan(scene, run_config, calibration_steps: int = 30) -> dict:
     dt = (solver.time - t0) / steps
     rate = steps / wall
     end = run_config.output.end_time
-    return {"scene": scene.name, "model": run_config.reduction.label, "dx": model.config.dx,
+    until = reduce.valid_until(scene) if run_config.reduction.model == "2d_until_reflection" else {}
+    return {"scene": scene.name, "valid_until": until, "model": run_config.reduction.label, "dx": model.config.dx,
             "kernel": model.config.kernel,
             "precision": model.config.precision, "device": str(solver.device), "particles": solver.n,
             "fluid_particles": model.fluid_particles, "device_bytes": solver.device_bytes(),
@@ -63,8 +64,15 @@ def table(plans: list, not_applicable: dict) -> str:
         lines.append(f"{p['model']:<18} {p['particles']:>11,} {p['fluid_particles']:>11,} "
                      f"{p['device_bytes'] / 1e6:>10.1f} {p['steps_per_s']:>9.1f} {p['steps']:>9,} "
                      f"{p['wall_s'] / 60:>9.2f} {share:>6.1%}")
+    lines += [f"{p['model']:<18} {validity(p)}" for p in plans if p["valid_until"]]
     lines += [f"{label:<18} not applicable: {why}" for label, why in not_applicable.items()]
     return "\n".join(lines)
+
+
+def validity(p: dict) -> str:
+    """Until when a model that holds only for a while (2d_until_reflection) holds at its probes."""
+    return "holds until " + ", ".join(f"t = {t:.3g} s at {name}" for name, t in p["valid_until"].items()) + \
+        " (then the obstacle's reflection arrives)"
 
 
 def text(p: dict) -> str:
@@ -78,4 +86,4 @@ def text(p: dict) -> str:
         f"{p['steps_per_s']:.1f} steps/s, {p['mipps']:.3f} MIPPS",
         f"estimate     to t = {p['end_time']:g} s: about {p['steps']:,} steps (at least: faster flow, shorter steps), "
         f"about {p['wall_s'] / 60:.1f} min of wall time",
-    ])
+    ] + ([f"validity     {validity(p)}"] if p["valid_until"] else []))

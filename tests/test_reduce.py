@@ -53,14 +53,34 @@ def test_reductions_that_do_not_fit_are_refused_with_the_reason():
     assert err.value.field == "slab_width" and "0.45 m (9 spacings)" in str(err.value)
     with pytest.raises(ConfigError) as err:
         resolve(db2, model="3d")
-    assert err.value.field == "model" and "full, slab, 2d" in str(err.value)
+    assert err.value.field == "model" and "full, slab, 2d, 2d_until_reflection" in str(err.value)
+    with pytest.raises(ConfigError, match="no probe lies upstream of an obstacle"):
+        resolve(db2, model="2d_until_reflection")
     db2_planes = dataclasses.replace(db2, walls={face: "planes" for face in db2.walls})
     options = reduce.applicable(db2_planes, 13.0, 0.05)
-    assert set(options["apply"]) == {"slab", "2d"} and set(options["not applicable"]) == {"crop", "wall_planes"}
+    assert set(options["apply"]) == {"slab", "2d"}
+    assert set(options["not applicable"]) == {"crop", "wall_planes", "2d_until_reflection"}
     assert set(reduce.applicable(db2, 13.0, 0.05)["apply"]) == {"slab", "2d", "wall_planes", "2d+wall_planes"}
     options = reduce.applicable(db1, 3.0, 0.02)
-    assert set(options["apply"]) == {"wall_planes"}
+    assert set(options["apply"]) == {"wall_planes", "2d_until_reflection"}
     assert "nothing lies out of reach" in options["not applicable"]["crop"]
+
+
+def test_2d_until_reflection_is_the_section_without_the_obstruction_and_says_until_when():
+    """DamBreak 1 (lab): column face at 0.4 m, obstruction's upstream face at 0.90 m, probe at
+    0.754 m, a 1 cm bed under 0.30 m: Stoker's bore (1.891 m/s) takes 0.264 s to the obstruction,
+    and a reflection at most sqrt(g H) = 1.716 m/s takes 0.085 s back to the probe."""
+    db1 = load_scene("dambreak1_lab")
+    until = reduce.valid_until(db1)
+    assert set(until) == {"velocity"}  # probe D stands beside the obstruction: no 2D model holds there
+    assert until["velocity"] == pytest.approx(0.5 / 1.8911 + 0.146 / (9.81 * 0.3) ** 0.5, rel=1e-3)
+    model = build_run(db1, resolve(db1, dx=0.04, model="2d_until_reflection"))
+    scene = model.scene
+    assert scene.dim == 2 and scene.obstacles == [] and [p.name for p in scene.probes] == ["velocity"]
+    assert scene.probes[0].position[:2] == (0.754, 0.026) and scene.wet_bed == 0.01
+    # the same water per metre of width as the 3D column and bed
+    full = build_run(db1, resolve(db1, dx=0.04))
+    assert fluid_mass(model) == pytest.approx(fluid_mass(full) / 0.67, rel=0.02)
 
 
 def test_crop_keeps_what_a_front_reaches_and_the_world_coordinates():

@@ -33,7 +33,7 @@ def test_search_for_the_smallest_stable_value_and_the_ends():
 
 def test_combinations_and_their_settings():
     combos = st.combinations()
-    assert len(combos) == 3 * 3 * 4 * 3 == 108
+    assert len(combos) == 3 * 3 * 5 * 3 == 135
     planes = st.Combination("wendland", "sps", "planes", "shepard").settings()
     assert planes == {"kernel": "wendland", "viscosity": "sps", "density_diffusion": "none", "shepard_every": 40,
                       "wall_planes": True}

@@ -6,6 +6,12 @@
   narrowest the cell search allows, ``min_slab_cells`` spacings, a little over three kernel
   supports), probes moved to its middle. 3D turbulence and the 3D kernel survive; the side walls,
   which a uniform flow does not feel, go.
+- ``2d_until_reflection``: a 3D scene whose fluid spans the tank's width but whose obstacles do not
+  (DamBreak 1) becomes the x-z section without those obstacles. Upstream of an obstacle it is the
+  same flow until the obstacle's reflection comes back (``valid_until``): the front reaches the
+  obstacle at the bore speed of shallow-water theory (Stoker's on a wet bed, analysis/stoker.py;
+  Ritter's 2 sqrt(g H) on a dry one), and nothing travels back upstream faster than sqrt(g H).
+  Probes downstream of such an obstacle's upstream face are dropped.
 - ``crop``: along each horizontal axis, the tank is cut to what a disturbance can reach before the
   end time, a front moving at most 2 sqrt(g H) (the dam-break front speed of shallow-water
   theory, Ritter 1892) from the fluid's vertical faces, probes kept inside; an obstacle disturbs
@@ -26,7 +32,8 @@ from dataclasses import dataclass
 from ..sph.config import LIST_SKIN, ConfigError
 from .schema import Scene
 
-MODELS = ("full", "slab", "2d")
+MODELS = ("full", "slab", "2d", "2d_until_reflection")
+NO_PROBE_UPSTREAM = "no probe lies upstream of an obstacle narrower than the tank"
 
 
 @dataclass
@@ -57,12 +64,13 @@ def min_slab_cells(hdx: float) -> int:
     return int(math.ceil(3 * LIST_SKIN * 2.0 * hdx - 1e-9))
 
 
-def uniform_across_y(scene: Scene) -> str:
-    """Why the flow of ``scene`` is not uniform across y, or "" when it is."""
+def uniform_across_y(scene: Scene, obstacles: bool = True) -> str:
+    """Why the flow of ``scene`` (of its fluid only, without ``obstacles``) is not uniform across y,
+    or "" when it is."""
     if scene.dim != 3:
         return "the scene is 2D already"
     width = scene.tank[1]
-    for kind, boxes in (("fluid", scene.fluid), ("obstacles", scene.obstacles)):
+    for kind, boxes in (("fluid", scene.fluid), ("obstacles", scene.obstacles if obstacles else [])):
         for k, box in enumerate(boxes):
             if box.lo[1] > 0.0 or box.hi[1] < width:
                 return f"{kind}[{k}] ({box.name}) does not span the tank's width y = [0, {width:g}]"
@@ -86,6 +94,50 @@ def _section(scene: Scene) -> Scene:
                                gravity=(0.0, scene.gravity[2], 0.0), periodic=(scene.periodic[0], False, False),
                                walls=walls, fluid=[box2(b) for b in scene.fluid],
                                obstacles=[box2(o) for o in scene.obstacles], probes=probes)
+
+
+def _narrow_obstacles(scene: Scene) -> list:
+    """The obstacles that do not span the tank's width."""
+    return [o for o in scene.obstacles if o.lo[1] > 0.0 or o.hi[1] < scene.tank[1]]
+
+
+def _front_speed(scene: Scene) -> float:
+    """The speed of a dam-break front in ``scene``: Stoker's bore on its wet bed, Ritter's 2 sqrt(g H) dry."""
+    from ..analysis.stoker import stoker
+
+    up = scene.dim - 1
+    g, depth = abs(scene.gravity[up]), max(b.hi[up] for b in scene.fluid)
+    if 0.0 < scene.wet_bed < depth:
+        return stoker(depth, scene.wet_bed, g).bore_speed
+    return 2.0 * math.sqrt(g * depth)
+
+
+def valid_until(scene: Scene) -> dict:
+    """{probe name: the time [s] until which the ``2d_until_reflection`` section holds there}, for
+    the probes upstream of every narrow obstacle (see the module docstring); {} when none applies."""
+    narrow = _narrow_obstacles(scene)
+    if not narrow or uniform_across_y(scene, obstacles=False):
+        return {}
+    up = scene.dim - 1
+    g, depth = abs(scene.gravity[up]), max(b.hi[up] for b in scene.fluid)
+    front = max(b.hi[0] for b in scene.fluid if b.hi[0] < scene.tank[0])
+    speed, back = _front_speed(scene), math.sqrt(g * depth)
+    out = {}
+    for p in scene.probes:
+        ahead = [o.lo[0] for o in narrow if o.lo[0] > p.position[0]]
+        if len(ahead) == len(narrow):
+            face = min(ahead)
+            out[p.name] = max(0.0, face - front) / speed + (face - p.position[0]) / back
+    return out
+
+
+def _until_reflection(scene: Scene) -> Scene:
+    """The x-z section without the narrow obstacles, keeping the probes upstream of them."""
+    keep = valid_until(scene)
+    narrow = _narrow_obstacles(scene)
+    full_width = [o for o in scene.obstacles if o not in narrow]
+    probes = [p for p in scene.probes if p.name in keep]
+    return _section(dataclasses.replace(scene, obstacles=full_width, probes=probes))
 
 
 def _slab(scene: Scene, width: float) -> Scene:
@@ -167,7 +219,12 @@ def apply(scene: Scene, reduction: Reduction, end_time: float, dx: float, hdx: f
     """``scene`` reduced as ``reduction`` says; ConfigError naming the setting when a reduction
     does not fit the scene."""
     reduction.validate()
-    if reduction.model != "full":
+    if reduction.model == "2d_until_reflection":
+        why = uniform_across_y(scene, obstacles=False) or ("" if valid_until(scene) else NO_PROBE_UPSTREAM)
+        if why:
+            raise ConfigError("model", reduction.model, f"full or 2d: {why}")
+        scene = _until_reflection(scene)
+    elif reduction.model != "full":
         why = uniform_across_y(scene)
         if why:
             raise ConfigError("model", reduction.model, f"full: {why}")
@@ -196,6 +253,11 @@ def applicable(scene: Scene, end_time: float, dx: float) -> dict:
             skipped[model] = why
         else:
             out[model] = Reduction(model=model)
+    until = valid_until(scene)
+    if until:
+        out["2d_until_reflection"] = Reduction(model="2d_until_reflection")
+    else:
+        skipped["2d_until_reflection"] = uniform_across_y(scene, obstacles=False) or NO_PROBE_UPSTREAM
     cropped = _crop(scene, end_time, dx)
     if cropped is scene:
         skipped["crop"] = (f"nothing lies out of reach: a front covers {reach(scene, end_time):.3g} m "

@@ -78,6 +78,9 @@ class SolverConfig:
     kernel: str = "cubic_spline"
     viscosity: str = "artificial"
     alpha: float = 0.1  # artificial viscosity coefficient (Monaghan 1992); DualSPHysics dam-break value
+    # alpha's multiplier between fluid and boundary particles (DualSPHysics' ViscoBoundFactor): the
+    # artificial viscosity of a fluid particle sliding past wall particles at rest is a wall friction
+    visco_bound_factor: float = 1.0
     nu: float = 1.0e-6  # kinematic viscosity of water [m^2/s], laminar and SPS
     sps_cs: float = 0.12  # Smagorinsky constant (thesis Eq. 2.20)
     sps_ci: float = 6.6e-3  # isotropic SPS coefficient C_I (thesis Eq. 2.19)
@@ -196,8 +199,8 @@ class SolverConfig:
         choice("precision", PRECISIONS)
         for name in ("dx", "hdx", "rho0", "gamma", "depth", "cfl", "c0_coef", "xsph_eps", "mk_beta"):
             positive(name)
-        for name in ("alpha", "nu", "sps_cs", "sps_ci", "delta", "c0", "dt_fixed", "settle_tau", "settle_until",
-                     "penetration_ratio", "clump_ratio", "clump_fraction", "energy_growth_ratio"):
+        for name in ("alpha", "visco_bound_factor", "nu", "sps_cs", "sps_ci", "delta", "c0", "dt_fixed", "settle_tau",
+                     "settle_until", "penetration_ratio", "clump_ratio", "clump_fraction", "energy_growth_ratio"):
             positive(name, strict=False)
         if self.mk_beta < 1.0:
             raise ConfigError("mk_beta", self.mk_beta, "a number >= 1 (boundary particles no sparser than fluid)")

@@ -84,7 +84,10 @@ def _force_passes(scalar):
         acc = pressure_gradient(m_b, f.p_rho2[a], f.p_rho2[b], grad)
         if p.viscosity == ARTIFICIAL:
             # c0 for the mean sound speed, as GPUSPH: weak compressibility keeps c within ~1% of c0
-            acc += visc_artificial(p.alpha, p.h, p.c0, scalar(0.5) * (rho_a + rho_b), m_b, u_ab, r_ab, r2_eta,
+            alpha = p.alpha
+            if t_b == BOUNDARY:
+                alpha = p.alpha_wall
+            acc += visc_artificial(alpha, p.h, p.c0, scalar(0.5) * (rho_a + rho_b), m_b, u_ab, r_ab, r2_eta,
                                    grad)
         else:
             acc += visc_laminar(p.nu, rho_a, rho_b, m_b, u_ab, r_ab, r2_eta, grad)

@@ -107,6 +107,7 @@ class Solver:
         p.eta2 = 0.01 * cfg.h ** 2
         p.viscosity = viscosity.VISCOSITY_ID[cfg.viscosity]
         p.alpha = cfg.alpha
+        p.alpha_wall = cfg.alpha * cfg.visco_bound_factor
         p.nu = cfg.nu
         p.cs_dl2 = (cfg.sps_cs * cfg.dx) ** 2
         p.ci_dl2 = cfg.sps_ci * cfg.dx ** 2

@@ -25,6 +25,7 @@ def build(scalar):
         eta2: scalar  # 0.01 h^2 regulariser
         viscosity: int
         alpha: scalar
+        alpha_wall: scalar  # alpha x visco_bound_factor, for pairs with a boundary particle
         nu: scalar
         cs_dl2: scalar
         ci_dl2: scalar

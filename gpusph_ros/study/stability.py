@@ -26,7 +26,7 @@ from pathlib import Path
 
 KERNELS = ("quadratic", "cubic_spline", "wendland")
 VISCOSITIES = ("artificial", "laminar", "sps")
-BOUNDARIES = ("lennard_jones", "monaghan_kajtar", "planes", "dynamic")
+BOUNDARIES = ("lennard_jones", "monaghan_kajtar", "planes", "dynamic", "mdbc")
 DENSITIES = ("none", "shepard", "delta")
 CFL_RANGE = (0.1, 1.0)
 C0_RANGE = (2.0, 20.0)
