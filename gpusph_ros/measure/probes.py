@@ -22,7 +22,8 @@ def build(scalar):
     vec = wp.types.vector(3, scalar)
     kernel_w = kernels.build(scalar).w
     N = neighbours.grid(scalar)
-    Grid, separation, cell_coord, neighbour_cell = N.Grid, N.separation, N.cell_coord, N.neighbour_cell
+    Grid, separation, cell_coord, cells_around, cell_around = (N.Grid, N.separation, N.cell_coord, N.cells_around,
+                                                                N.cell_around)
     S = state.build(scalar)
     Params, Fields = S.Params, S.Fields
 
@@ -38,20 +39,18 @@ def build(scalar):
         pr = scalar(0.0)
         r = scalar(0.0)
         wsum = scalar(0.0)
-        for dz in range(-grid.reach_z, grid.reach_z + 1):
-            for dy in range(-grid.reach, grid.reach + 1):
-                for dx in range(-grid.reach, grid.reach + 1):
-                    cell = neighbour_cell(grid, ci, dx, dy, dz)
-                    if cell >= 0:
-                        for s in range(start[cell], end[cell]):
-                            b = order[s]
-                            if f.ptype[b] == FLUID:
-                                w = kernel_w(p.kernel, p.norm, p.inv_h, wp.length(separation(grid, x, f.pos[b])))
-                                wv = w * f.mass[b] / f.rho[b]
-                                u += wv * f.vel[b]
-                                pr += wv * f.pressure[b]
-                                r += wv * f.rho[b]
-                                wsum += wv
+        for c in range(cells_around(grid)):
+            cell = cell_around(grid, ci, c)
+            if cell >= 0:
+                for s in range(start[cell], end[cell]):
+                    b = order[s]
+                    if f.ptype[b] == FLUID:
+                        w = kernel_w(p.kernel, p.norm, p.inv_h, wp.length(separation(grid, x, f.pos[b])))
+                        wv = w * f.mass[b] / f.rho[b]
+                        u += wv * f.vel[b]
+                        pr += wv * f.pressure[b]
+                        r += wv * f.rho[b]
+                        wsum += wv
         weight[k] = wsum
         if wsum > scalar(0.0):
             vel[k] = u / wsum

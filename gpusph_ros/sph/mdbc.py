@@ -48,7 +48,8 @@ def build(scalar):
     K = kernels.build(scalar)
     kernel_w, grad_factor = K.w, K.grad_factor
     N = neighbours.grid(scalar)
-    Grid, separation, cell_coord, neighbour_cell = N.Grid, N.separation, N.cell_coord, N.neighbour_cell
+    Grid, separation, cell_coord, cells_around, cell_around = (N.Grid, N.separation, N.cell_coord, N.cells_around,
+                                                                N.cell_around)
     S = state.build(scalar)
     Params, Fields = S.Params, S.Fields
     eos_pressure = eos.build(scalar).pressure
@@ -163,15 +164,12 @@ def build(scalar):
         rhs = vec4(scalar(0.0))
         u = vec(scalar(0.0))
         ci = cell_coord(grid, xg)
-        for dz in range(-grid.reach_z, grid.reach_z + 1):
-            for dy in range(-grid.reach, grid.reach + 1):
-                for dx_ in range(-grid.reach, grid.reach + 1):
-                    cell = neighbour_cell(grid, ci, dx_, dy, dz)
-                    if cell >= 0:
-                        for s in range(start[cell], end[cell]):
-                            j = order[s]
-                            if f.ptype[j] == FLUID:
-                                a, rhs, u = ghost_term(p, grid, f, xg, j, a, rhs, u)
+        for c in range(cells_around(grid)):
+            cell = cell_around(grid, ci, c)
+            if cell >= 0:
+                for s in range(start[cell], end[cell]):
+                    if f.ptype[order[s]] == FLUID:
+                        a, rhs, u = ghost_term(p, grid, f, xg, order[s], a, rhs, u)
         weight[k] = a[0, 0]
         pressure[k] = scalar(0.0)
         if a[0, 0] > scalar(0.0):

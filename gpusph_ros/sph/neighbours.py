@@ -83,7 +83,21 @@ def grid(scalar):
             return -1
         return (cz * grid.dims[1] + cy) * grid.dims[0] + cx
 
-    return SimpleNamespace(Grid=Grid, separation=separation, cell_coord=cell_coord, neighbour_cell=neighbour_cell)
+    @wp.func
+    def cells_around(grid: Grid) -> int:
+        """How many cells a point's search visits: ``reach`` each way (``reach_z`` on z)."""
+        side = 2 * grid.reach + 1
+        return side * side * (2 * grid.reach_z + 1)
+
+    @wp.func
+    def cell_around(grid: Grid, ci: wp.vec3i, k: int) -> int:
+        """The k-th of the cells_around cell ci (flat index), or -1 off the grid."""
+        side = 2 * grid.reach + 1
+        return neighbour_cell(grid, ci, k % side - grid.reach, (k / side) % side - grid.reach,
+                              k / (side * side) - grid.reach_z)
+
+    return SimpleNamespace(Grid=Grid, separation=separation, cell_coord=cell_coord, neighbour_cell=neighbour_cell,
+                           cells_around=cells_around, cell_around=cell_around)
 
 
 @functools.lru_cache(maxsize=None)
