@@ -1,7 +1,7 @@
 """Martin & Moyce 1952 column collapse at several resolutions: surge front against the table,
 with no time shift, and the wall time each resolution cost.
 
-    python bench/collapse.py [--per-width 20 30 40] [--precision float32]
+    python bench/collapse.py [--per-width 20 30 40] [--precision float32] [--set KEY=VALUE ...]
 """
 import argparse
 import time
@@ -11,6 +11,7 @@ import warp as wp
 
 from gpusph_ros.scenes.build import build
 from gpusph_ros.scenes.schema import load_scene
+from gpusph_ros.scenes.yaml_input import value
 from gpusph_ros.share import data_dir
 from gpusph_ros.sph import Solver
 
@@ -24,7 +25,9 @@ def main():
     parser.add_argument("--per-width", type=int, nargs="+", default=[20, 30, 40])
     parser.add_argument("--precision", default="float32")
     parser.add_argument("--device", default="cpu")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a solver setting")
     args = parser.parse_args()
+    settings = {key: value(text) for key, _, text in (item.partition("=") for item in args.set)}
     wp.config.log_level = wp.LOG_WARNING  # no per-module load lines
     table = np.loadtxt(TABLE)
     points = table[(table[:, 0] >= 1.0) & (table[:, 0] <= 2.55)]
@@ -32,7 +35,7 @@ def main():
     print("T      Z_exp  " + "  ".join(f"a/{k:<3d} Z   err  " for k in args.per_width))
     results = []
     for per_width in args.per_width:
-        model = build(SCENE, dx=WIDTH / per_width, precision=args.precision, device=args.device)
+        model = build(SCENE, dx=WIDTH / per_width, precision=args.precision, device=args.device, **settings)
         solver = Solver(model.config, model.particles)
         start = time.perf_counter()
         fronts = []

@@ -45,10 +45,7 @@ def main(argv=None):
     wp.config.log_level = wp.LOG_WARNING  # no per-module load lines
     from gpusph_ros.scenes.yaml_input import value
 
-    settings = {}
-    for item in args.set:
-        key, _, text = item.partition("=")
-        settings[key] = value(text)
+    settings = {key: value(text) for key, _, text in (item.partition("=") for item in args.set)}
     print(f"{args.scene}, 2d_until_reflection, settings {settings or 'default'}; measured peak {MEASURED} m/s")
     print(f"{'dx mm':>6} {'particles':>9} {'steps':>7} {'wall s':>8} {'valid to s':>10} {'peak m/s':>8} "
           f"{'at s':>6} {'error':>7} {'excl':>5}")
