@@ -41,6 +41,13 @@ LABELS = {
     "bore_arrival": ("bore arrival (greatest acceleration)", "s"),
     "mean_velocity": ("mean depth-averaged velocity, 6 s behind the bore", "m/s"),
 }
+# the Lobovsky case's sensors and gauges (lobovsky(), which adds each sensor's height to its label)
+SENSOR_LABELS = {"peak": ("peak pressure", "p/(rho g H)"), "t_peak": ("time of the peak", "t sqrt(g/H)"),
+                 "impulse": ("first-impact pressure-time integral", "p t/(rho g H) sqrt(g/H)"),
+                 "rms": ("RMS error of the pressure", "p/(rho g H)")}
+LABELS.update({f"{kind}_sensor_{k}": (f"{label}, sensor {k}", unit) for kind, (label, unit) in SENSOR_LABELS.items()
+               for k in (1, 2, 3, 4)})
+LABELS.update({f"rms_{g}": (f"RMS error of the water level at {g}", "h/H") for g in ("H1", "H2", "H3", "H4")})
 
 
 def _metric(key, value, experiment=None, gpusph=None, note=""):
@@ -175,10 +182,8 @@ def lobovsky(rec, scene, run, data):
                         note=f"impact starts at {start:.3g}" + (f", measured {e_start:.3g}" if exp else "")),
                 _metric(f"rms_sensor_{k}", M.rms_error(t, p, *exp) if exp else None,
                         note=f"of a measured peak {e_pk:.3g}" if exp else "")]
-        for row, (label, unit) in zip(rows, (("peak pressure", "p/(rho g H)"), ("time of the peak", "t sqrt(g/H)"),
-                                             ("first-impact pressure-time integral", "p t/(rho g H) sqrt(g/H)"),
-                                             ("RMS error of the pressure", "p/(rho g H)"))):
-            row["label"], row["unit"] = f"{label}, {where}", unit
+        for row, (label, _) in zip(rows, SENSOR_LABELS.values()):
+            row["label"] = f"{label}, {where}"
         out += rows
         curves["pressure"][k] = (t, p, exp)
     vertical = 1 if scene.get("dim") == 2 else 2
@@ -189,9 +194,7 @@ def lobovsky(rec, scene, run, data):
             continue
         t, h = s["t"] * t_unit, s["v"][:, vertical] / depth
         exp = exp_h.get(gauge)
-        row = _metric(f"rms_{gauge}", M.rms_error(t, h, *exp) if exp else None)
-        row["label"], row["unit"] = f"RMS error of the water level at {gauge}", "h/H"
-        out.append(row)
+        out.append(_metric(f"rms_{gauge}", M.rms_error(t, h, *exp) if exp else None))
         curves["levels"][gauge] = (t, h, exp)
     return out, {"lobovsky": curves}
 

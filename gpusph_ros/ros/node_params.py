@@ -60,6 +60,9 @@ PARAMS = (
     Param("wall_planes", False, "every wall of boundary particles as a particle-less plane", RESET),
     Param("precision", "float32", "floating-point precision of the solver state", RESET, choices=PRECISIONS),
     Param("device", "cpu", "Warp device: cpu or cuda:N", RESET),
+    Param("visco_bound_factor", 1.0, "artificial viscosity between fluid and wall particles, as a multiple of "
+          "alpha (DualSPHysics' ViscoBoundFactor); it acts as a wall friction: 0 lets a surge run free", LIVE,
+          lo=0.0, hi=10.0),
     Param("cfl", 0.3, "Courant number of the adaptive time step (Monaghan 1992, as GPUSPH)", LIVE, lo=0.01, hi=1.0),
     Param("c0", 0.0, "speed of sound [m/s]; 0 = 10 sqrt(g H) with the scene's depth H (thesis Section 2.3)",
           LIVE, lo=0.0, hi=1000.0),
@@ -86,7 +89,8 @@ DEFAULTS = {p.name: p.default for p in PARAMS}
 # numerics (Solver.reconfigure), the run's outputs (Run.set_output), the cloud (Run.set_cloud) or
 # the node's pacing. A LIVE parameter comes to the settings of the same name, except those below.
 LIVE_SETTINGS = {"kernel": "solver", "viscosity": "solver", "density_diffusion": "solver", "cfl": "solver",
-                 "c0": "solver", "max_excluded_fraction": "solver", "mdbc_slip": "solver", "end_time": "output",
+                 "c0": "solver", "max_excluded_fraction": "solver", "mdbc_slip": "solver",
+                 "visco_bound_factor": "solver", "end_time": "output",
                  "output_rate": "output", "particle_rate": "output", "particle_fields": "cloud", "frame_id": "cloud",
                  "real_time_factor": "pace"}
 _SETTINGS_OF = {"sps": ("viscosity",), "publish_particles": ("particle_rate",)}
@@ -161,7 +165,7 @@ def run_settings(values: dict):
     scene = load_scene(values["scene"])
     output = {k: values[k] for k in ("end_time", "output_rate") if values[k] > 0.0}
     numerics = {k: values[k] for k in ("dx", "kernel", "boundary", "density_diffusion", "precision", "device",
-                                       "cfl", "c0", "max_excluded_fraction", "mdbc_slip")}
+                                       "cfl", "c0", "max_excluded_fraction", "mdbc_slip", "visco_bound_factor")}
     numerics["viscosity"] = "sps" if values["sps"] else values["viscosity"]
     reduction = {k: values[k] for k in ("model", "crop", "wall_planes")}
     # the node's clouds follow output_rate

@@ -2,18 +2,21 @@
 Gómez-Gesteira 2021, Comp. Part. Mech. 9:1-15; DualSPHysics' ``JSphCpu::InteractionMdbcCorrection``).
 
 Under plain dynamic boundaries (Crespo et al. 2007) a wall particle's density grows by the
-continuity equation only while fluid pushes into it, so the fluid settles about 1.5 h off the wall
-and the wall's pressure is noisy. mDBC instead gives each boundary particle, before every force
-evaluation, the density the fluid has at the particle's mirror image across the wall face (its
-ghost node, x_g = 2 x_w - x_b, x_w the nearest point of the face):
+continuity equation only while fluid pushes into it and keeps what it gained, so in a flow the fluid
+stands off the wall (about 1.5 h in English et al.'s tests) and the wall's pressure is noisy. mDBC
+instead gives each boundary particle, once a step before the first force pass (DualSPHysics with
+MdbcCorrector off; the half step inherits it), the density the fluid has at the particle's mirror
+image across the wall face (its ghost node, x_g = 2 x_w - x_b, x_w the nearest point of the face):
 
     A [rho_g, grad rho]^T = [sum_j m_j W_gj, sum_j m_j grad_g W_gj]^T, over fluid j, with
     A = sum_j V_j [W_gj; grad_g W_gj] (x) [1, x_j - x_g],  V_j = m_j / rho_j
 
 (a first-order kernel-corrected sum, Liu & Liu 2006), then extrapolates back to the particle:
 rho_b = rho_g + grad rho . (x_b - x_g). Where det A < 1e-3 (a thin film, a corner) it falls back to
-the Shepard density sum m W / sum V W; with no fluid near the ghost the particle takes rho0. In 2D
-the unused third axis is padded with the identity, so one 4 x 4 system serves both dimensions.
+the Shepard density sum m W / sum V W; with no fluid near the ghost the particle takes rho0. The
+result is held within the fluid's density bounds (health.py): extrapolated 2.5 dx behind the face
+(the third layer), a steep impact gradient would overshoot them. In 2D the unused third axis is
+padded with the identity, so one 4 x 4 system serves both dimensions.
 
 The ghost node follows from the scene's geometry, which is boxes: a tank wall particle (outside the
 tank) mirrors through the nearest point of the tank's inside (a corner particle through the corner,
@@ -135,8 +138,6 @@ def build(scalar):
         base = i * grid.max_neighbours
         for k in range(count[i]):
             a, rhs, u = ghost_term(p, grid, f, xg, nbr[base + k], a, rhs, u)
-        # within the fluid's own density bounds (health.py): a steep impact gradient extrapolated 2.5 dx
-        # behind the face (the third layer) would otherwise overshoot what any fluid particle may hold
         f.rho[i] = wp.clamp(extrapolate(p, a, rhs, -off), p.rho_min, p.rho_max)
         u_b = vec(scalar(0.0))
         if a[0, 0] > scalar(0.0):
