@@ -106,3 +106,18 @@ def test_gpusph_analyze_on_a_study_folder_prints_the_thesis_style_tables(tmp_pat
     failed = next(line for line in lines if line.startswith("s3") and " 15 " in line)
     assert "health check 'density_bounds' failed" in failed and "(" not in failed.split()[2]
     assert "cheapest within 10%: dambreak1_thesis-s3-dx=0.03 (2.39, +8.0%) in 150 s" in out
+
+
+def test_a_case_that_raised_runs_again_and_one_that_failed_a_check_does_not(tmp_path):
+    import json
+
+    from gpusph_ros.study.case import case_dir, finished_row
+
+    for name, status in (("done", "completed"), ("unstable", "failed: density_bounds at t = 0.4 s"),
+                         ("crashed", "error: WarpCodegenTypeError: ...")):
+        folder = case_dir(tmp_path, name)
+        folder.mkdir(parents=True)
+        (folder / "metrics.json").write_text(json.dumps({"row": {"case": name, "status": status}}))
+    assert finished_row(tmp_path, "done")["status"] == "completed"
+    assert finished_row(tmp_path, "unstable")["status"].startswith("failed")
+    assert finished_row(tmp_path, "crashed") is None and finished_row(tmp_path, "never_ran") is None

@@ -23,14 +23,17 @@ def case_dir(out, name) -> Path:
 
 
 def finished_row(out, name):
-    """The row of a case that has already finished (completed or failed), or None."""
+    """The row of a case that has already finished (completed, or failed by a health check), or
+    None: a case that never ran, or one that raised (``error: ...``, the code rather than the
+    physics, perhaps fixed since), runs again."""
     path = case_dir(out, name) / "metrics.json"
     if not path.is_file():
         return None
     try:
-        return json.loads(path.read_text())["row"]
+        row = json.loads(path.read_text())["row"]
     except (ValueError, KeyError):
         return None  # cut short while writing: run it again
+    return None if str(row.get("status", "")).startswith("error") else row
 
 
 def row_of(case: dict, report: dict, result: dict, metrics: list) -> dict:
