@@ -6,7 +6,7 @@
   velocity within 1% and the bore within 1% of its run.
 - The built-in ``stoker_2d`` scene (H = 0.1 m, h0/H = 0.1, dx = 5 mm: two particles across the bed)
   at t = 1 s: bore position, plateau depth and depth-mean velocity within 3% of Stoker's (measured,
-  default numerics but ``visco_bound_factor: 0``: bore +2.5%, depth -0.8%, velocity -0.7%; with the
+  default numerics but ``visco_bound_factor: 0``: bore +1.3%, depth -0.3%, velocity -0.8%; with the
   wall's artificial viscosity on, the default, the surge runs 27% slow: it is a wall friction that
   a shallow-water bore does not feel).
 """
@@ -80,10 +80,10 @@ def test_the_sph_surge_over_a_wet_bed_is_stokers():
     run.solver.advance(t)
     snap = run.solver.snapshot()
     f = snap["ptype"] == 0
-    got = surge(snap["pos"][f], snap["vel"][f], t, 1.0, 0.1, 0.01, dx)
+    got = surge(snap["pos"][f], snap["vel"][f], t, 0.6, 0.1, 0.01, dx)
     s = stoker(0.1, 0.01)
-    print(f"\nbore {got.bore:.4f} m (Stoker {1.0 + s.bore_speed * t:.4f}), depth {got.depth:.4f} m ({s.h_m:.4f}), "
+    print(f"\nbore {got.bore:.4f} m (Stoker {0.6 + s.bore_speed * t:.4f}), depth {got.depth:.4f} m ({s.h_m:.4f}), "
           f"velocity {got.velocity:.4f} m/s ({s.u_m:.4f})")
-    assert (got.bore - 1.0) / t == pytest.approx(s.bore_speed, rel=0.03)
+    assert (got.bore - 0.6) / t == pytest.approx(s.bore_speed, rel=0.03)
     assert got.depth == pytest.approx(s.h_m, rel=0.03)
     assert got.velocity == pytest.approx(s.u_m, rel=0.03)

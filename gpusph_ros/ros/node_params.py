@@ -55,7 +55,9 @@ PARAMS = (
     Param("density_diffusion", "delta", "density treatment: none, or delta-SPH (Molteni & Colagrossi 2009)", LIVE,
           choices=DENSITY_DIFFUSIONS),
     Param("model", "full", "how the scene is modelled: full, slab (a thin periodic slab across y) or 2d (the x-z "
-          "section), for a flow uniform across y such as dambreak2_*", RESET, choices=MODELS),
+          "section), for a flow uniform across y such as dambreak2_*; 2d_until_reflection (the x-z section without "
+          "the narrow obstacles, for the probes upstream of them until their reflection returns)", RESET,
+          choices=MODELS),
     Param("crop", False, "cut the tank to what a front moving at 2 sqrt(g H) reaches by the end time", RESET),
     Param("wall_planes", False, "every wall of boundary particles as a particle-less plane", RESET),
     Param("precision", "float32", "floating-point precision of the solver state", RESET, choices=PRECISIONS),
