@@ -17,6 +17,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 
 @dataclass(frozen=True)
 class StokerState:
@@ -79,8 +81,6 @@ def surge(pos, vel, t: float, x0: float, depth: float, bed: float, dx: float, di
     axis the last of ``dim``) at time t after a dam at x0 broke: columns 2 dx wide, each one's
     surface dx/2 over its highest particle; the bore is the most downstream column deeper than
     halfway from the bed to Stoker's h_m."""
-    import numpy as np
-
     s = stoker(depth, bed, g)
     up = dim - 1
     x, y, u = np.asarray(pos)[:, 0], np.asarray(pos)[:, up], np.asarray(vel)[:, 0]

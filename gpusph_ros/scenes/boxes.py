@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..sph.config import Plane, SolverConfig
+from ..sph.config import DENSITY_WALLS, Plane, SolverConfig
 from ..sph.eos import hydrostatic_density
 from ..sph.solver import Particles
 from ..sph.state import BOUNDARY, FLUID
@@ -137,7 +137,7 @@ def beyond_faces(pts, hi, dim: int, faces) -> np.ndarray:
 
 def boundary_layers(boundary: str, hdx: float) -> int:
     """Dynamic boundaries (and mDBC) need a full kernel support of particles; force-based ones one layer."""
-    return int(np.ceil(2.0 * hdx)) if boundary in ("dynamic", "mdbc") else 1
+    return int(np.ceil(2.0 * hdx)) if boundary in DENSITY_WALLS else 1
 
 
 def box_tank(cfg: SolverConfig, tank, fluid_boxes, walls="particles", headroom: float = 0.5):
@@ -170,7 +170,7 @@ def box_tank(cfg: SolverConfig, tank, fluid_boxes, walls="particles", headroom: 
     wall = np.zeros((0, 3))
     if len(plane_faces) < len(kinds):
         layers = boundary_layers(cfg.boundary, cfg.hdx)
-        if cfg.boundary in ("dynamic", "mdbc"):
+        if cfg.boundary in DENSITY_WALLS:
             wall = wall_particles(tank, dx, dim, layers, periodic)
         else:
             spacing = dx / cfg.mk_beta if cfg.boundary == "monaghan_kajtar" else dx

@@ -101,12 +101,11 @@ def _narrow_obstacles(scene: Scene) -> list:
     return [o for o in scene.obstacles if o.lo[1] > 0.0 or o.hi[1] < scene.tank[1]]
 
 
-def _front_speed(scene: Scene) -> float:
-    """The speed of a dam-break front in ``scene``: Stoker's bore on its wet bed, Ritter's 2 sqrt(g H) dry."""
+def _front_speed(scene: Scene, g: float, depth: float) -> float:
+    """The speed of a dam-break front of a column ``depth`` deep in ``scene``: Stoker's bore on its wet
+    bed, Ritter's 2 sqrt(g H) dry."""
     from ..analysis.stoker import stoker
 
-    up = scene.dim - 1
-    g, depth = abs(scene.gravity[up]), max(b.hi[up] for b in scene.fluid)
     if 0.0 < scene.wet_bed < depth:
         return stoker(depth, scene.wet_bed, g).bore_speed
     return 2.0 * math.sqrt(g * depth)
@@ -121,7 +120,7 @@ def valid_until(scene: Scene) -> dict:
     up = scene.dim - 1
     g, depth = abs(scene.gravity[up]), max(b.hi[up] for b in scene.fluid)
     front = max(b.hi[0] for b in scene.fluid if b.hi[0] < scene.tank[0])
-    speed, back = _front_speed(scene), math.sqrt(g * depth)
+    speed, back = _front_speed(scene, g, depth), math.sqrt(g * depth)
     out = {}
     for p in scene.probes:
         ahead = [o.lo[0] for o in narrow if o.lo[0] > p.position[0]]

@@ -15,6 +15,9 @@ KERNELS = ("quadratic", "cubic_spline", "wendland")
 VISCOSITIES = ("artificial", "laminar", "sps")
 BOUNDARIES = ("lennard_jones", "monaghan_kajtar", "dynamic", "mdbc")
 MDBC_SLIPS = ("none", "no_slip", "free_slip")
+# boundary models whose wall particles carry a density (a kernel support of layers, lists of their own);
+# boundaries.BOUNDARY_ID numbers them from "dynamic" up
+DENSITY_WALLS = ("dynamic", "mdbc")
 DENSITY_DIFFUSIONS = ("none", "delta")
 PRECISIONS = ("float32", "float64")
 

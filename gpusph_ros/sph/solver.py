@@ -13,7 +13,7 @@ import numpy as np
 import warp as wp
 
 from . import boundaries, density, health, kernels, mdbc, passes, viscosity
-from .config import SolverConfig, check_device
+from .config import DENSITY_WALLS, SolverConfig, check_device
 from .health import HealthError
 from .launch import Launcher
 from .neighbours import NeighbourList, NeighbourOverflow
@@ -168,7 +168,7 @@ class Solver:
         self.ids = arr(np.arange(n, dtype=np.int32), wp.int32)
         # boundary particles need their own list only for their density (dynamic: by continuity;
         # mDBC: the list holds the fluid near the ghost node too) or to sum a body force
-        needs = (particles.ptype == FLUID) | (particles.body >= 0) | (cfg.boundary in ("dynamic", "mdbc"))
+        needs = (particles.ptype == FLUID) | (particles.body >= 0) | (cfg.boundary in DENSITY_WALLS)
         self._needs_list = arr(needs.astype(np.int32), wp.int32)
         self._ghost = wp.zeros(n, dtype=v, device=dev)  # mDBC's ghost-node offsets (mdbc.py); else zero
         self._sorted = [wp.empty_like(a) for a in (self.pos, self.vel, self.rho, self.mass, self.ptype, self.body,
