@@ -166,4 +166,4 @@ class Run:
         """The result record a recording closes with."""
         return {"status": status, "wall_time_s": round(self.wall, 3), "steps": self.solver.steps,
                 "simulated_time_s": self.solver.time, "mipps": round(self.mipps(), 4), "outputs": self.next_output,
-                **self.exclusions()}
+                **self.exclusions(), **self.solver.health_peaks}

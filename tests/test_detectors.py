@@ -1,5 +1,6 @@
 """Failure detectors for what does not show as NaN (sph.health, CHECKS): each fires on a run broken
-on purpose and stays quiet on the same run done right.
+on purpose and stays quiet on the same run done right; the run's health peak (Solver.health_peaks)
+passes the detector's limit on the broken run and stays under it on the healthy one.
 
 - wall_penetration: a column thrown at 3 m/s onto a Lennard-Jones floor (Monaghan 1994; thesis
   Eq. 2.24) whose strength D = 5 g H is taken with H = 0.1 mm instead of the column's 0.11 m;
@@ -28,14 +29,19 @@ def collapse(**numerics):
     return build(scene, dx=scene.fluid[0].hi[0] / 15, **numerics)
 
 
-def outcome(cfg, particles, end):
-    """The check that stopped the run, or None when it reached ``end``."""
+def outcome(cfg, particles, end, peak=None):
+    """The check that stopped the run, or None when it reached ``end``. With ``peak`` (a key of
+    Solver.health_peaks and its limit), the run's peak must pass the limit exactly when it failed."""
     solver = Solver(cfg, particles)
     try:
         solver.advance(end)
     except HealthError as err:
+        if peak:
+            assert solver.health_peaks[peak[0]] > peak[1], (err, solver.health_peaks)
         return err
     assert solver.time == pytest.approx(end)
+    if peak:
+        assert solver.health_peaks[peak[0]] <= peak[1], solver.health_peaks
     return None
 
 
@@ -68,7 +74,7 @@ def test_clumping(rho_ratio, fires):
                        **WIDE)
     particles = Particles(pos=pos, vel=np.zeros((n * n, 3)), rho=np.full(n * n, 1000.0 * rho_ratio),
                           mass=np.full(n * n, 1000.0 * dx * dx), ptype=np.zeros(n * n))
-    err = outcome(cfg, particles, 0.5)
+    err = outcome(cfg, particles, 0.5, peak=("peak_clumped_fraction", cfg.clump_fraction))
     if not fires:
         assert err is None, err
         return
@@ -82,7 +88,7 @@ def test_energy_growth(factor, fires):
     probe = Solver(model.config, model.particles)
     probe.step()
     cfg = model.config.replace(dt_fixed=factor * probe.dt_stable, **WIDE)
-    err = outcome(cfg, model.particles, 0.3)
+    err = outcome(cfg, model.particles, 0.3, peak=("peak_energy_growth", cfg.energy_growth_ratio))
     if not fires:
         assert err is None, err
         return

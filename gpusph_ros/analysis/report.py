@@ -247,6 +247,25 @@ def excluded_line(result: dict) -> str:
             f"fluid mass: {result.get('excluded_by_reason')}; the first at t = {float(first):.4g} s)")
 
 
+HEALTH_PEAKS = ("peak_clumped_fraction", "min_density_ratio", "max_density_ratio", "peak_energy_growth")
+
+
+def health_line(result: dict) -> str:
+    """'health peaks: clumped 8.6%, density 0.93-1.18 rho0, energy growth 0.2% M g H' from a
+    result record (sph.Solver.health_peaks), what the run reached against the detectors' limits."""
+    def number(key):
+        try:
+            return float(result.get(key))
+        except (TypeError, ValueError):  # absent, or "None" read back from a recording
+            return None
+    clump, lo, hi, growth = (number(k) for k in HEALTH_PEAKS)
+    if clump is None:
+        return "health peaks not recorded"
+    density = f"density {lo:.3f}-{hi:.3f} rho0" if lo is not None else "no fluid density seen"
+    return (f"health peaks: clumped {clump:.1%}, {density}, energy growth "
+            + (f"{growth:.2%} M g H" if growth is not None else "-"))
+
+
 def fmt(value, err=None):
     """A value to three figures, its percent error in brackets; "-" for none."""
     if value is None or (isinstance(value, float) and not np.isfinite(value)):
@@ -270,7 +289,7 @@ def table(report) -> str:
             f"{report['particles']:,} particles ({report['fluid_particles']:,} fluid); "
             f"status {res.get('status', 'unknown (no result record: killed?)')}, "
             f"wall {res.get('wall_time_s', '?')} s, {res.get('steps', '?')} steps, {res.get('mipps', '?')} MIPPS; "
-            + excluded_line(res), gp, ""]
+            + excluded_line(res), health_line(res), gp, ""]
     if report.get("velocity_probe"):
         head.insert(-1, f"velocity probe at {report['velocity_probe']} m")
     if res.get("status") != "completed":

@@ -192,13 +192,17 @@ def build(scalar):
     @wp.kernel(enable_backward=False, module="unique")
     def census(p: Params, pos: wp.array(dtype=vec), vel: wp.array(dtype=vec), rho: wp.array(dtype=scalar),
                mass: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32),
-               clumped: wp.array(dtype=wp.int32), solid_lo: wp.array(dtype=vec), solid_hi: wp.array(dtype=vec),
-               total: wp.array(dtype=wp.float64), count: wp.array(dtype=wp.int32)):
-        """total[0] += the fluid's kinetic + potential + elastic energy; count = [clumped fluid
-        particles away from walls, the first of them] (one launch: atomics)."""
+               clumped: wp.array(dtype=wp.int32), faulty: wp.array(dtype=wp.int32), solid_lo: wp.array(dtype=vec),
+               solid_hi: wp.array(dtype=vec), total: wp.array(dtype=wp.float64), count: wp.array(dtype=wp.int32)):
+        """total[0] += the fluid's kinetic + potential + elastic energy; total[4], total[5] hold the
+        lowest and highest density of a fluid particle not at fault seen in any census; count =
+        [clumped fluid particles away from walls, the first of them] (one launch: atomics)."""
         i = wp.tid()
         if ptype[i] != FLUID:
             return
+        if faulty[i] == 0:
+            wp.atomic_min(total, 4, wp.float64(rho[i]))
+            wp.atomic_max(total, 5, wp.float64(rho[i]))
         if clumped[i] != 0 and not near_wall(p, pos[i], solid_lo, solid_hi):
             wp.atomic_add(count, 0, 1)
             wp.atomic_min(count, 1, ids[i])
@@ -211,11 +215,13 @@ def build(scalar):
     def census_check(p: Params, total: wp.array(dtype=wp.float64), count: wp.array(dtype=wp.int32),
                      fail: wp.array(dtype=wp.int32)):
         """total = [candidate's energy, energy at the start (or NO_ENERGY before the first check),
-        the largest clumped fraction seen]: flags energy_growth when the candidate exceeds the start
-        by the slack, clumping when too many particles have clumped."""
+        the largest clumped fraction seen, the largest rise of the energy above its start, ...]:
+        flags energy_growth when the candidate exceeds the start by the slack, clumping when too
+        many particles have clumped."""
         e = total[0]
         if total[1] == wp.float64(1.0e300):  # NO_ENERGY, written as a literal: a Python float would be float32
             total[1] = e
+        total[3] = wp.max(total[3], e - total[1])
         if p.energy_slack > wp.float64(0.0) and e > total[1] + p.energy_slack:
             fail[ENERGY_GROWTH] = 0
         fraction = wp.float64(count[0]) / wp.float64(p.n_fluid)

@@ -197,9 +197,10 @@ class Solver:
             wp.launch(self._mdbc.ghost_offsets, dim=n, inputs=[self.params, self.pos, self.ptype, self.body,
                                                                self._solid_lo, self._solid_hi, self._ghost], device=dev)
         self._fail = arr(np.full(health.N_CHECKS, health.NO_FAILURE, dtype=np.int32), wp.int32)
-        # candidate's energy, energy at the start, the largest clumped fraction seen
-        # (health.census_check); clumped fluid particles and the first of them
-        self._energy_sum = arr(np.array([0.0, health.NO_ENERGY, 0.0]), wp.float64)
+        # candidate's energy, energy at the start, the largest clumped fraction seen, the largest rise
+        # of the energy, the lowest and highest healthy fluid density (health.census, census_check);
+        # clumped fluid particles and the first of them
+        self._energy_sum = arr(np.array([0.0, health.NO_ENERGY, 0.0, 0.0, 1.0e300, -1.0e300]), wp.float64)
         self._clumped = wp.zeros(n, dtype=wp.int32, device=dev)
         self._clump_count = arr(np.array([0, health.NO_FAILURE], dtype=np.int32), wp.int32)
         # exclusions (health.py): fluid particles at fault in the candidate, their count by reason and
@@ -265,8 +266,8 @@ class Solver:
         if self._launched % _CENSUS_EVERY == 0:
             self._energy_sum[0:1].zero_()
             wp.launch(k.census, dim=n, inputs=[p, self._pos_c, self._vel_c, self._rho_c, self.mass, self.ptype,
-                                               self.ids, self._clumped, self._solid_lo, self._solid_hi,
-                                               self._energy_sum, self._clump_count], device=dev)
+                                               self.ids, self._clumped, self._faulty, self._solid_lo,
+                                               self._solid_hi, self._energy_sum, self._clump_count], device=dev)
             wp.launch(k.census_check, dim=1, inputs=[p, self._energy_sum, self._clump_count, self._fail],
                       device=dev)
         wp.launch(k.exclusion_check, dim=1, inputs=[p, self._clock, self._pending, self._pending_mass,
@@ -336,6 +337,22 @@ class Solver:
     def excluded_fraction(self) -> float:
         """The excluded fluid's share of the fluid mass."""
         return float(self._excluded_host[1][0]) / self._fluid_mass if self._fluid_mass > 0.0 else 0.0
+
+    @property
+    def health_peaks(self) -> dict:
+        """What the whole-state detectors have measured so far, every census (16 steps): the largest
+        clumped fraction of the fluid (health.census: pairs closer than clump_ratio dx away from
+        walls), the lowest and highest density of a healthy fluid particle as ratios of rho0, and
+        the largest rise of the fluid's energy above its start in M g H. A limit is set against
+        what healthy runs reach (README, docs/defaults.md)."""
+        e = self._energy_sum.numpy()
+        cfg = self.config
+        mgh = self._fluid_mass * cfg.g_norm * cfg.depth
+        seen = e[4] <= e[5]
+        return {"peak_clumped_fraction": float(e[2]),
+                "min_density_ratio": float(e[4]) / cfg.rho0 if seen else None,
+                "max_density_ratio": float(e[5]) / cfg.rho0 if seen else None,
+                "peak_energy_growth": float(e[3]) / mgh if mgh > 0.0 else None}
 
     @property
     def first_excluded_time(self) -> "float | None":

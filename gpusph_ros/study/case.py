@@ -10,7 +10,7 @@ import shutil
 import time
 from pathlib import Path
 
-from ..analysis.report import analyse
+from ..analysis.report import HEALTH_PEAKS, analyse
 from ..runner import Run
 from ..scenes.schema import load_scene
 from ..scenes.settings import resolve
@@ -45,7 +45,8 @@ def row_of(case: dict, report: dict, result: dict, metrics: list) -> dict:
            "fluid_particles": report.get("fluid_particles"), "steps": result.get("steps"),
            "simulated_time_s": result.get("simulated_time_s"), "wall_time_s": result.get("wall_time_s"),
            "mipps": result.get("mipps"), "excluded_particles": result.get("excluded_particles"),
-           "excluded_fraction": result.get("excluded_fraction"), "dx": report.get("dx"),
+           "excluded_fraction": result.get("excluded_fraction"), **{k: result.get(k) for k in HEALTH_PEAKS},
+           "dx": report.get("dx"),
            **{k: report.get(k) for k in RUN_FIELDS}, "gpusph_scenario": report.get("gpusph_scenario"),
            "gpusph_scenario_exact": report.get("gpusph_scenario_exact")}
     for key, value in case["grid"].items():  # a case that never ran still says where it sat
