@@ -195,12 +195,15 @@ def test_ros2_run_lookup_finds_the_installed_executable(workspace, sourced):
 
 # -- running ----------------------------------------------------------------------------------
 def test_the_node_runs_and_reports_itself_on_diagnostics(client):
-    status = _diagnostic(client, lambda s: s["state"] == "running")
+    status = _diagnostic(client, lambda s: s["state"] == "running" and int(s.get("steps", 0)) > 0)
     assert status["level"] == DiagnosticStatus.OK
     assert status["scene"] == "dambreak1_thesis" and int(status["particles"]) == 4385
     assert status["device"] == "cpu" and status["precision"] == "float32"
     for key in ("simulated_time", "dt", "steps", "steps_per_s", "mipps", "real_time_factor", "error"):
         assert key in status
+    # the health peaks so far: a dam break at rest or just released is inside the density bounds
+    assert 0.8 <= float(status["min_density_ratio"]) <= float(status["max_density_ratio"]) <= 1.25
+    assert 0.0 <= float(status["peak_clumped_fraction"]) <= 0.2
     client.clear("/clock")
     clocks = [_t(m.clock) for m in client.wait_for("/clock", lambda m: len(m) >= 3)]
     assert clocks == sorted(clocks) and clocks[-1] > 0.0

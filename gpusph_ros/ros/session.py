@@ -91,7 +91,7 @@ class Session:
         out.update(scene=run.scene.name, simulated_time=solver.time, dt=solver.dt, particles=solver.n,
                    steps=solver.steps, steps_per_s=steps_per_s, mipps=steps_per_s * solver.n / 1e6,
                    real_time_factor=rtf, device=str(solver.device), precision=run.model.config.precision,
-                   end_time=run.output.end_time, **run.exclusions())
+                   end_time=run.output.end_time, **run.exclusions(), **solver.health_peaks)
         return out
 
     # -- the thread ----------------------------------------------------------------------------

@@ -93,6 +93,7 @@ class Solver:
         self._launched = 0
         self.time, self.dt, self.dt_stable, self.steps = 0.0, 0.0, 0.0, 0
         self._excluded_host = (np.zeros(health.N_REASONS, dtype=np.int32), np.array([0.0, -1.0]))
+        self._census_host = np.array([0.0, health.NO_ENERGY, 0.0, 0.0, 1.0e300, -1.0e300])  # as of the last sync
 
     # -- set-up -------------------------------------------------------------------------
     def _make_params(self):
@@ -298,6 +299,7 @@ class Solver:
         self.time, self.dt, self.dt_stable = float(clock[0]), float(clock[1]), float(clock[2])
         self.steps = int(steps[0])
         self._excluded_host = (self._excluded.numpy(), self._excluded_mass.numpy())
+        self._census_host = self._energy_sum.numpy()
         for check, idx in zip(health.CHECKS, fail):
             if idx == health.NO_FAILURE:
                 continue
@@ -343,9 +345,10 @@ class Solver:
         """What the whole-state detectors have measured so far, every census (16 steps): the largest
         clumped fraction of the fluid (health.census: pairs closer than clump_ratio dx away from
         walls), the lowest and highest density of a healthy fluid particle as ratios of rho0, and
-        the largest rise of the fluid's energy above its start in M g H. A limit is set against
-        what healthy runs reach (README, docs/defaults.md)."""
-        e = self._energy_sum.numpy()
+        the largest rise of the fluid's energy above its start in M g H, as of the last sync (host
+        copies only, so any thread may ask). A limit is set against what healthy runs reach
+        (README, docs/defaults.md)."""
+        e = self._census_host
         cfg = self.config
         mgh = self._fluid_mass * cfg.g_norm * cfg.depth
         seen = e[4] <= e[5]
