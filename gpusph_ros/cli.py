@@ -145,7 +145,8 @@ def _analyze_study(folder) -> int:
     metrics = json.loads((folder / "study.json").read_text())["metrics"]
     print(table.thesis_tables(rows, metrics))
     print("\n" + table.headline(rows, metrics))
-    written = charts.write(rows, metrics, folder / "charts", data_dir())
+    (folder / "results.md").write_text(table.markdown(rows, metrics))
+    written = [folder / "results.md"] + charts.write(rows, metrics, folder / "charts", data_dir())
     print("".join(f"\nchart: {w}" for w in written))
     return 0
 
@@ -179,7 +180,9 @@ def sweep_main(argv=None):
     (study.out / "study.json").write_text(json.dumps({"name": study.name, "metrics": study.metrics,
                                                       "cases": [c.name for c in study.cases()]}, indent=1))
     rows = sweep(study, scheduler=args.scheduler, progress=lambda line: print(line, flush=True))
-    written = table.write(rows, study.out) + charts.write(rows, study.metrics, study.out / "charts", data_dir())
+    (study.out / "results.md").write_text(table.markdown(rows, study.metrics))
+    written = table.write(rows, study.out) + [study.out / "results.md"] + charts.write(
+        rows, study.metrics, study.out / "charts", data_dir())
     print(table.thesis_tables(rows, study.metrics))
     print("\n" + table.headline(rows, study.metrics))
     print("".join(f"\nwrote {w}" for w in written))

@@ -106,6 +106,12 @@ def test_gpusph_analyze_on_a_study_folder_prints_the_thesis_style_tables(tmp_pat
     failed = next(line for line in lines if line.startswith("s3") and " 15 " in line)
     assert "health check 'density_bounds' failed" in failed and "(" not in failed.split()[2]
     assert "cheapest within 10%: dambreak1_thesis-s3-dx=0.03 (2.39, +8.0%) in 150 s" in out
+    # and results.md, one line per case with its health peaks (none recorded in the fixture: "-")
+    md = (tmp_path / "results.md").read_text().splitlines()
+    assert md[0].startswith("| scenario | dx [mm] | status | steps | wall [s] | peak_velocity | excluded |")
+    assert len(md) == 2 + len(ROWS)
+    assert md[3].split(" | ")[:6] == ["| s1", "20", "completed", "1,000", "400.0", "1.94 (-12.0%)"]
+    assert md[-1].split(" | ")[5] == "-"  # the failed case's metric is not reported
 
 
 def test_a_case_that_raised_runs_again_and_one_that_failed_a_check_does_not(tmp_path):

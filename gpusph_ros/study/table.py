@@ -1,5 +1,5 @@
-"""A study's results table (CSV and Parquet), each metric's error measure, and the headline: the
-cheapest setting within a tolerance of the experiment."""
+"""A study's results table (CSV and Parquet, and as Markdown for docs/), each metric's error
+measure, and the headline: the cheapest setting within a tolerance of the experiment."""
 import csv
 import re
 from pathlib import Path
@@ -115,6 +115,31 @@ def thesis_tables(rows, metrics) -> str:
             widths = [max(len(line[k]) for line in lines) for k in range(6)]
             out += ["  ".join(c.ljust(w) for c, w in zip(line, widths)).rstrip() for line in lines]
     return "\n".join(out).lstrip("\n")
+
+
+def markdown(rows, metrics) -> str:
+    """One line per case: its scenario and dx, how it ended, steps and wall time, each metric (its
+    percent error against the experiment beside it), the particles it excluded and the health
+    peaks it reached (sph.Solver.health_peaks), so that one scenario reads against another."""
+    from ..analysis.report import fmt
+
+    def pct(value):
+        return "-" if value is None else f"{100 * value:.1f}%"
+
+    head = ["scenario", "dx [mm]", "status", "steps", "wall [s]", *metrics, "excluded",
+            "peak clumped", "density / rho0", "energy rise / M g H"]
+    lines = ["| " + " | ".join(head) + " |", "|" + " --- |" * len(head)]
+    for r in rows:
+        done = r.get("status") == "completed"
+        lo, hi = r.get("min_density_ratio"), r.get("max_density_ratio")
+        cells = [r["scenario"], f"{(r.get('dx') or 0.0) * 1000:g}", short_status(r.get("status")),
+                 "-" if r.get("steps") is None else f"{int(r['steps']):,}", fmt(r.get("wall_time_s")),
+                 *[fmt(r.get(m), r.get(f"{m}_error_pct")) if done else "-" for m in metrics],
+                 f"{int(r.get('excluded_particles') or 0)} ({pct(r.get('excluded_fraction'))})",
+                 pct(r.get("peak_clumped_fraction")),
+                 "-" if lo is None or hi is None else f"{lo:.3f}-{hi:.3f}", pct(r.get("peak_energy_growth"))]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
 
 
 def headline(rows, metrics, tolerance_pct=10.0) -> str:
