@@ -1,7 +1,7 @@
 """Measurements on a still 2D tank with an obstruction, against hydrostatics: the thesis's
 pressure blocks (Section 3.2) give rho0 g d^2 / 2 per unit depth on each face and no net force,
 the depth-averaged column (Section 3.3) the mean of a linear velocity profile, the surface gauge
-the stated depth. The state is the scene's hydrostatic start; nothing is stepped."""
+the stated depth, also under spray. The state is the scene's hydrostatic start; nothing is stepped."""
 import numpy as np
 import pytest
 
@@ -58,6 +58,17 @@ def test_column_mean_of_a_linear_profile(still_tank):
     assert out["vel"][0, 0] == pytest.approx(0.5 + 2.0 * DEPTH / 2, rel=1e-9)
     assert out["count"][0] == 6 * round(DEPTH / DX)  # 6 columns of particles within 3 dx
     assert ColumnMeans(solver, [(0.33, 0.0, 0.0)], [0.5 * DX]).sample()["count"][0] == 0  # inside the wall
+
+
+def test_spray_over_the_gauge_is_not_the_water_at_it():
+    # a blob 4 cm thick held 6 cm above the surface, as spray or an overturning jet over an air
+    # pocket: going up from the floor the gauge stops where the water column ends (DualSPHysics'
+    # GaugeSwl), not at the top of the blob
+    scene = {**TANK, "tank": [0.6, 0.4],
+             "fluid": TANK["fluid"] + [{"name": "spray", "lo": [0.12, 0.30], "hi": [0.18, 0.34]}]}
+    model = build(parse_scene(scene), dx=DX, precision="float64", boundary="lennard_jones")
+    sample = Measurements(Solver(model.config, model.particles), model).sample()
+    assert sample["gauges"]["eta"] == pytest.approx(DEPTH, abs=0.25 * DX)
 
 
 def test_surface_gauge_reads_the_stated_depth(still_tank):

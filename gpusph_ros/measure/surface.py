@@ -1,7 +1,9 @@
-"""Free-surface elevation at a gauge: the highest point of a vertical line where the fluid's
-kernel sum sum_b W(x - x_b) m_b / rho_b reaches 1/2, the level a free surface has halfway
-through the kernel's reach (the level-crossing gauges of DualSPHysics and GPUSPH). The line is
-sampled every dx/4 with the point probes' interpolation on the device."""
+"""Free-surface elevation at a gauge: going up a vertical line from the floor, the first height
+where the fluid's kernel sum sum_b W(x - x_b) m_b / rho_b falls below 1/2 after the line was
+wet, the level a free surface has halfway through the kernel's reach. This is DualSPHysics'
+GaugeSwl (JGaugeSwl::CalculeCpuT: from point0 up to the first fluid-to-empty change, mass limit
+half a particle's mass): spray and an overturning jet above an air pocket are not the water at
+the gauge. The line is sampled every dx/4 with the point probes' interpolation on the device."""
 import numpy as np
 
 LEVEL = 0.5
@@ -17,13 +19,15 @@ def gauge_points(position, top: float, dx: float, dim: int) -> np.ndarray:
 
 
 def elevation(heights: np.ndarray, weight: np.ndarray) -> float:
-    """The highest height where ``weight`` crosses LEVEL from below, interpolated linearly; 0
-    for a dry gauge."""
-    wet = np.nonzero(weight >= LEVEL)[0]
-    if len(wet) == 0:
+    """The first height above a wet point where ``weight`` falls below LEVEL, interpolated
+    linearly; the top of the line when it never falls; 0 for a dry gauge."""
+    wet = weight >= LEVEL
+    if not wet.any():
         return 0.0
-    k = wet[-1]
-    if k + 1 == len(heights):
-        return float(heights[k])
+    first = int(np.argmax(wet))
+    dry = np.nonzero(~wet[first:])[0]
+    if len(dry) == 0:
+        return float(heights[-1])
+    k = first + int(dry[0]) - 1  # the last wet point below the first fall
     w0, w1 = weight[k], weight[k + 1]
     return float(heights[k] + (heights[k + 1] - heights[k]) * (w0 - LEVEL) / (w0 - w1))
