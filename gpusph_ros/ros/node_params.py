@@ -65,7 +65,7 @@ PARAMS = (
     Param("visco_bound_factor", 1.0, "artificial viscosity between fluid and wall particles, as a multiple of "
           "alpha (DualSPHysics' ViscoBoundFactor); it acts as a wall friction: 0 lets a surge run free", LIVE,
           lo=0.0, hi=10.0),
-    Param("cfl", 0.3, "Courant number of the adaptive time step (Monaghan 1992, as GPUSPH)", LIVE, lo=0.01, hi=1.0),
+    Param("cfl", 0.4, "Courant number of the adaptive time step (Monaghan 1992, as GPUSPH)", LIVE, lo=0.01, hi=1.0),
     Param("c0", 0.0, "speed of sound [m/s]; 0 = 10 sqrt(g H) with the scene's depth H (thesis Section 2.3)",
           LIVE, lo=0.0, hi=1000.0),
     Param("max_excluded_fraction", 0.01, "share of the fluid mass that may be excluded (a particle whose density, "

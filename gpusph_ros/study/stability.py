@@ -30,6 +30,7 @@ BOUNDARIES = ("lennard_jones", "monaghan_kajtar", "planes", "dynamic", "mdbc")
 DENSITIES = ("none", "shepard", "delta")
 CFL_RANGE = (0.1, 1.0)
 C0_RANGE = (2.0, 20.0)
+C0_SEARCH_CFL = 0.3  # the CFL of the sound-speed search, where docs/stability was measured
 COLUMNS = ("kernel", "viscosity", "boundary", "density", "cfl_max", "cfl_failure", "c0_coef_min", "c0_failure",
            "runs", "wall_s")
 
@@ -118,7 +119,8 @@ def limits(combination: Combination, scene: str, end_time: float, dx: float, ite
     base = {**combination.settings(), "dx": dx, "end_time": end_time, "output_rate": 1.0 / end_time,
             "particle_rate": 0.0, "device": device, "cpu_threads": 1}
     cfl, cfl_failure, cfl_runs = search(lambda x: trial(scene, {**base, "cfl": x}), *CFL_RANGE, "lo", iterations)
-    c0, c0_failure, c0_runs = search(lambda x: trial(scene, {**base, "c0_coef": x}), *C0_RANGE, "hi", iterations)
+    c0, c0_failure, c0_runs = search(lambda x: trial(scene, {**base, "cfl": C0_SEARCH_CFL, "c0_coef": x}), *C0_RANGE,
+                                     "hi", iterations)
     return {"kernel": combination.kernel, "viscosity": combination.viscosity, "boundary": combination.boundary,
             "density": combination.density, "cfl_max": cfl, "cfl_failure": cfl_failure, "c0_coef_min": c0,
             "c0_failure": c0_failure, "runs": cfl_runs + c0_runs, "wall_s": round(time.perf_counter() - start, 1)}
