@@ -61,6 +61,9 @@ NO_FAILURE = 2 ** 31 - 1
 CLUMP_WALL_DX = 1.5  # [dx] clumping is not counted this close to a wall or solid
 CLUMP_MIN = 16  # clumped particles below which no fraction is a failure: in a run of 18 particles one pair is 11%
 NO_ENERGY = 1.0e300  # the energy check's "no reference yet"
+# the census sums before any census (census, census_check): energy, energy at the start, largest
+# clumped fraction, largest energy rise, lowest and highest healthy fluid density
+CENSUS_START = (0.0, NO_ENERGY, 0.0, 0.0, 1.0e300, -1.0e300)
 
 
 class HealthError(RuntimeError):

@@ -93,7 +93,7 @@ class Solver:
         self._launched = 0
         self.time, self.dt, self.dt_stable, self.steps = 0.0, 0.0, 0.0, 0
         self._excluded_host = (np.zeros(health.N_REASONS, dtype=np.int32), np.array([0.0, -1.0]))
-        self._census_host = np.array([0.0, health.NO_ENERGY, 0.0, 0.0, 1.0e300, -1.0e300])  # as of the last sync
+        self._census_host = np.array(health.CENSUS_START)  # as of the last sync
 
     # -- set-up -------------------------------------------------------------------------
     def _make_params(self):
@@ -198,10 +198,8 @@ class Solver:
             wp.launch(self._mdbc.ghost_offsets, dim=n, inputs=[self.params, self.pos, self.ptype, self.body,
                                                                self._solid_lo, self._solid_hi, self._ghost], device=dev)
         self._fail = arr(np.full(health.N_CHECKS, health.NO_FAILURE, dtype=np.int32), wp.int32)
-        # candidate's energy, energy at the start, the largest clumped fraction seen, the largest rise
-        # of the energy, the lowest and highest healthy fluid density (health.census, census_check);
-        # clumped fluid particles and the first of them
-        self._energy_sum = arr(np.array([0.0, health.NO_ENERGY, 0.0, 0.0, 1.0e300, -1.0e300]), wp.float64)
+        # the census sums (health.CENSUS_START); clumped fluid particles and the first of them
+        self._energy_sum = arr(np.array(health.CENSUS_START), wp.float64)
         self._clumped = wp.zeros(n, dtype=wp.int32, device=dev)
         self._clump_count = arr(np.array([0, health.NO_FAILURE], dtype=np.int32), wp.int32)
         # exclusions (health.py): fluid particles at fault in the candidate, their count by reason and
