@@ -2,15 +2,19 @@
 
 - lennard_jones: Monaghan 1994; thesis Eq. 2.24-2.25. f = D ((r0/r)^p1 - (r0/r)^p2) r / r^2 with
   p1 = 12, p2 = 6 (GPUSPH's choice) for r < r0 (zero beyond: no attraction), D = 5 g H, r0 = dx.
-- monaghan_kajtar: Monaghan & Kajtar 2009; thesis Eq. 2.26-2.27.
-  f = K / beta r / r^2 W(q) 2 m_b / (m_a + m_b), K = g H, with W the Wendland shape
-  (1 - q/2)^4 (1 + 2q) normalised to W(0) = 1 (kernels.shape), so that f is an acceleration.
-  Boundary particles are spaced dx / beta along a wall (default beta = 2), which smooths the summed force along it.
-  The paper is 2D, where K / beta keeps the force per unit wall length independent of beta; a 3D
-  wall holds beta^2 boundary particles per fluid particle's footprint, so 3D divides by beta^2
-  (``mk_beta_factor`` = beta^(dim - 1)) to keep the force per unit wall area the same.
-  A fluid particle on the floor under a column of depth H settles where this force balances the
-  missing half of its pressure gradient, about 0.8 dx from the boundary particles.
+- monaghan_kajtar: Monaghan & Kajtar 2009; thesis Eq. 2.26-2.27, in the form GPUSPH ran it
+  (``MKForce``, forces_kernel.cu of 2011, the code the thesis validated):
+  f = K / beta r / (r (r - d)) W(q) 2 m_b / (m_a + m_b), K = g H, d = 1.1 dx / beta, with W the
+  Wendland shape (1 - q/2)^4 (1 + 2q) scaled to W(0) = 1.8 (the paper's Section 4 scales its
+  kernel to 1.77), so that f is an acceleration. The paper's r - d (the thesis prints r^2) puts a
+  singularity just outside the boundary particles' own spacing: the force grows without bound as a
+  fluid particle nears a boundary particle, which is what stops an impact; r - d is clipped at
+  d / 100 (TrixiParticles' clip) so that a particle a step carried past it is still pushed out.
+  Boundary particles are spaced dx / beta along a wall (default beta = 2), which smooths the summed
+  force along it. The paper is 2D, where K / beta keeps the force per unit wall length independent
+  of beta; a 3D wall holds beta^2 boundary particles per fluid particle's footprint, so 3D divides
+  by beta^2 (``mk_beta`` = beta^(dim - 1), as TrixiParticles) to keep the force per unit wall area
+  the same.
 - dynamic: Crespo et al. 2007 (the DualSPHysics default). Boundary particles obey the
   continuity equation and the equation of state but never move; the fluid sees them through the
   ordinary pressure and viscous terms. No function here: the pair terms are the fluid ones.
@@ -32,6 +36,7 @@ The wall constants (D, r0, K, the plane's r0) follow from the scene's g, depth a
 import functools
 from types import SimpleNamespace
 
+import numpy as np
 import warp as wp
 
 from . import kernels
@@ -39,14 +44,17 @@ from . import kernels
 # ids >= DYNAMIC are walls of particles that carry a density and a fluid volume
 BOUNDARY_ID = {"lennard_jones": 0, "monaghan_kajtar": 1, "dynamic": 2, "mdbc": 3}
 WENDLAND = kernels.WENDLAND
+LENNARD_JONES = BOUNDARY_ID["lennard_jones"]
+MK_W0 = 1.8  # W(0) of the Monaghan-Kajtar force's kernel, GPUSPH's scale
 
 
 def wall_constants(g: float, depth: float, dx: float, mk_beta: float, dim: int) -> dict:
     """The wall models' constants for gravity ``g``, fluid depth H and spacing dx, named as in Params:
-    Lennard-Jones D = 5 g H (Eq. 2.25) and r0 = dx; Monaghan-Kajtar K = g H (Eq. 2.27) and the
-    spacing ratio beta^(dim - 1) (see above: force per unit wall area); the plane's r0 = dx / 2."""
+    Lennard-Jones D = 5 g H (Eq. 2.25) and r0 = dx; Monaghan-Kajtar K = g H (Eq. 2.27), the
+    spacing ratio beta^(dim - 1) (see above: force per unit wall area) and the singular distance
+    d = 1.1 dx / beta (GPUSPH's MK_d); the plane's r0 = dx / 2."""
     return {"lj_d": 5.0 * g * depth, "lj_r0": dx, "mk_k": g * depth, "mk_beta": mk_beta ** (dim - 1),
-            "plane_r0": 0.5 * dx}
+            "mk_d": 1.1 * dx / mk_beta, "plane_r0": 0.5 * dx}
 
 
 @functools.lru_cache(maxsize=None)
@@ -65,13 +73,43 @@ def build(scalar):
         return d_coef * (s6 * s6 - s6) / (r * r) * r_ab
 
     @wp.func
-    def monaghan_kajtar(k_coef: scalar, beta: scalar, inv_h: scalar, m_a: scalar, m_b: scalar,
+    def monaghan_kajtar(k_coef: scalar, beta: scalar, d: scalar, inv_h: scalar, m_a: scalar, m_b: scalar,
                         r_ab: vec, r: scalar) -> vec:
         """Repulsion of a boundary particle of mass m_b on a fluid one of mass m_a (Eq. 2.26)."""
         if r * inv_h >= scalar(2.0) or r <= scalar(0.0):
             return vec(scalar(0.0))
-        wq = shape(WENDLAND, r * inv_h)
-        return k_coef / beta * wq / (r * r) * scalar(2.0) * m_b / (m_a + m_b) * r_ab
+        wq = scalar(MK_W0) * shape(WENDLAND, r * inv_h)
+        gap = wp.max(r - d, scalar(0.01) * d)
+        return k_coef / beta * wq / (r * gap) * scalar(2.0) * m_b / (m_a + m_b) * r_ab
+
+    @wp.func
+    def lennard_jones_potential(d_coef: scalar, r0: scalar, r: scalar) -> scalar:
+        """The energy per unit fluid mass that the Lennard-Jones force stores at distance r: its
+        integral from r to r0, D (((r0/r)^12 - 1) / 12 - ((r0/r)^6 - 1) / 6)."""
+        if r >= r0 or r <= scalar(0.0):
+            return scalar(0.0)
+        s2 = (r0 / r) * (r0 / r)
+        s6 = s2 * s2 * s2
+        return d_coef * ((s6 * s6 - scalar(1.0)) / scalar(12.0) - (s6 - scalar(1.0)) / scalar(6.0))
+
+    @wp.func
+    def monaghan_kajtar_potential(k_coef: scalar, beta: scalar, d: scalar, inv_h: scalar, m_a: scalar,
+                                  m_b: scalar, r: scalar) -> scalar:
+        """The energy per unit fluid mass that the Monaghan-Kajtar force stores at distance r: its
+        integral from r to the support 2h, taken in u = ln(s - d), where the integrand K / beta W(s)
+        2 m_b / (m_a + m_b) is smooth (16-point midpoint rule); from 1.01 d inwards, where the force
+        is clipped, nothing more is counted."""
+        support = scalar(2.0) / inv_h
+        lo = wp.max(r, scalar(1.01) * d)
+        if lo >= support:
+            return scalar(0.0)
+        u0 = wp.log(lo - d)
+        du = (wp.log(support - d) - u0) / scalar(16.0)
+        total = scalar(0.0)
+        for k in range(16):
+            s = d + wp.exp(u0 + (scalar(k) + scalar(0.5)) * du)
+            total += shape(WENDLAND, s * inv_h)
+        return k_coef / beta * scalar(MK_W0) * total * du * scalar(2.0) * m_b / (m_a + m_b)
 
     @wp.func
     def plane_kernel_flux(kernel: int, norm: scalar, inv_h: scalar, dim: int, d: scalar) -> scalar:
@@ -103,4 +141,46 @@ def build(scalar):
         acc = scalar(2.0) * p_a / rho_a * flux * n + lennard_jones(lj_d, r0, d * n, d)
         return acc, scalar(-2.0) * rho_a * wp.dot(u_a, n) * flux
 
-    return SimpleNamespace(lennard_jones=lennard_jones, monaghan_kajtar=monaghan_kajtar, plane_wall=plane_wall)
+    @wp.kernel(enable_backward=False, module="unique")
+    def evaluate_repulsion(model: int, k_coef: scalar, beta: scalar, d: scalar, r0: scalar, inv_h: scalar,
+                           mass: scalar, points: wp.array(dtype=vec), wall: wp.array(dtype=vec),
+                           acc: wp.array(dtype=vec), energy: wp.array(dtype=scalar)):
+        i = wp.tid()
+        a = vec(scalar(0.0))
+        e = scalar(0.0)
+        for j in range(wall.shape[0]):
+            r_ab = points[i] - wall[j]
+            r = wp.length(r_ab)
+            if model == LENNARD_JONES:
+                a += lennard_jones(k_coef, r0, r_ab, r)
+                e += lennard_jones_potential(k_coef, r0, r)
+            else:
+                a += monaghan_kajtar(k_coef, beta, d, inv_h, mass, mass, r_ab, r)
+                e += monaghan_kajtar_potential(k_coef, beta, d, inv_h, mass, mass, r)
+        acc[i] = a
+        energy[i] = e
+
+    return SimpleNamespace(lennard_jones=lennard_jones, monaghan_kajtar=monaghan_kajtar, plane_wall=plane_wall,
+                           lennard_jones_potential=lennard_jones_potential,
+                           monaghan_kajtar_potential=monaghan_kajtar_potential, evaluate_repulsion=evaluate_repulsion)
+
+
+def repulsion(boundary: str, points, wall, g: float, depth: float, dx: float, hdx: float = 1.3,
+              mk_beta: float = 2.0, dim: int = 2, device: str = None):
+    """What the boundary particles at ``wall`` do to a fluid particle (of their mass) at each of
+    ``points`` under the repulsive model ``boundary`` (lennard_jones, monaghan_kajtar), with the
+    scene's constants (``wall_constants``): (accelerations, the energy per unit mass they store),
+    host arrays computed by the device functions in float64."""
+    from .config import default_device
+
+    device = device or default_device()
+    c = wall_constants(g, depth, dx, mk_beta, dim)
+    kern = build(wp.float64).evaluate_repulsion
+    pts = wp.array(np.asarray(points, dtype=np.float64), dtype=wp.vec3d, device=device)
+    walls = wp.array(np.asarray(wall, dtype=np.float64), dtype=wp.vec3d, device=device)
+    acc = wp.zeros(len(pts), dtype=wp.vec3d, device=device)
+    energy = wp.zeros(len(pts), dtype=wp.float64, device=device)
+    k_coef = c["lj_d"] if boundary == "lennard_jones" else c["mk_k"]
+    wp.launch(kern, dim=len(pts), inputs=[BOUNDARY_ID[boundary], k_coef, c["mk_beta"], c["mk_d"], c["lj_r0"],
+                                          1.0 / (hdx * dx), 1.0, pts, walls, acc, energy], device=device)
+    return acc.numpy(), energy.numpy()

@@ -8,8 +8,9 @@ and is only combined here. The run-safety checks are health.py's.
 Step (predictor-corrector as GPUSPH, Herault et al. 2010):
   neighbours(x_n) -> eos -> [sps] -> interact(n) -> choose_dt
   -> integrate(dt/2) -> eos -> [sps] -> interact(n+1/2) -> integrate(dt) into the candidate state
-  -> health.check_particles(candidate) -> [health.census(candidate) -> health.census_check, every few
-  steps] -> health.exclusion_check -> commit (only if healthy; excluding faulty fluid particles)
+  -> health.check_particles(candidate) -> [health.census(candidate) (+ wall_energy on repulsive walls)
+  -> health.census_check, every few steps] -> health.exclusion_check -> commit (only if healthy;
+  excluding faulty fluid particles)
   -> tick -> [shepard every N steps]
 The committed state is never overwritten by a candidate that failed a health check.
 """
@@ -51,6 +52,7 @@ def _force_passes(scalar):
     concentration_terms, shift_velocity = Sh.concentration_terms, Sh.shift_velocity
     B = boundaries.build(scalar)
     lennard_jones, monaghan_kajtar, plane_wall = B.lennard_jones, B.monaghan_kajtar, B.plane_wall
+    lj_potential, mk_potential = B.lennard_jones_potential, B.monaghan_kajtar_potential
     N = neighbours.grid(scalar)
     Grid, separation = N.Grid, N.separation
 
@@ -70,8 +72,8 @@ def _force_passes(scalar):
         if t_b == BOUNDARY and p.boundary < DYNAMIC:  # walls without fluid volume
             if p.boundary == LENNARD_JONES:
                 return lennard_jones(p.lj_d, p.lj_r0, r_ab, r), scalar(0.0), zero, scalar(0.0), zero
-            return (monaghan_kajtar(p.mk_k, p.mk_beta, p.inv_h, f.mass[a], f.mass[b], r_ab, r), scalar(0.0), zero,
-                    scalar(0.0), zero)
+            return (monaghan_kajtar(p.mk_k, p.mk_beta, p.mk_d, p.inv_h, f.mass[a], f.mass[b], r_ab, r), scalar(0.0),
+                    zero, scalar(0.0), zero)
         m_b = f.mass[b]
         rho_a = f.rho[a]
         rho_b = f.rho[b]
@@ -203,6 +205,29 @@ def _force_passes(scalar):
         clumped[i] = close
 
     @wp.kernel(enable_backward=False, module="unique")
+    def wall_energy(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32),
+                    pos: wp.array(dtype=vec), mass: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
+                    total: wp.array(dtype=wp.float64), chunk: int, stride: int):
+        """total[0] += the energy the repulsive walls (Lennard-Jones, Monaghan-Kajtar) hold, so that
+        the census sums what a conservative wall conserves: a fluid particle pressed against such a
+        wall gives that energy back as motion."""
+        i = wp.tid() * stride + chunk
+        if ptype[i] != FLUID:
+            return
+        e = scalar(0.0)
+        base = i * grid.max_neighbours
+        for k in range(count[i]):
+            j = nbr[base + k]
+            if ptype[j] == BOUNDARY:
+                r = wp.length(separation(grid, pos[i], pos[j]))
+                if p.boundary == LENNARD_JONES:
+                    e += lj_potential(p.lj_d, p.lj_r0, r)
+                else:
+                    e += mk_potential(p.mk_k, p.mk_beta, p.mk_d, p.inv_h, mass[i], mass[j], r)
+        if e > scalar(0.0):
+            wp.atomic_add(total, 0, wp.float64(mass[i] * e))
+
+    @wp.kernel(enable_backward=False, module="unique")
     def shepard(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32), f: Fields,
                 rho_out: wp.array(dtype=scalar), chunk: int, stride: int):
         """The Shepard filter (density.shepard, thesis Eq. 2.28) on the fluid; boundaries keep theirs."""
@@ -214,6 +239,7 @@ def _force_passes(scalar):
                                      f.rho, f.mass, f.ptype)
 
     return SimpleNamespace(equation_of_state=equation_of_state, sps_strain=sps_strain, interact=interact,
+                           wall_energy=wall_energy,
                            shepard=shepard)
 
 

@@ -267,6 +267,10 @@ class Solver:
             wp.launch(k.census, dim=n, inputs=[p, self._pos_c, self._vel_c, self._rho_c, self.mass, self.ptype,
                                                self.ids, self._clumped, self._faulty, self._solid_lo,
                                                self._solid_hi, self._energy_sum, self._clump_count], device=dev)
+            if p.boundary < passes.DYNAMIC and self.n > self.n_fluid:
+                nl = self.neighbours
+                self.launch(k.wall_energy, n, [p, nl.grid, nl.nbr, nl.count, self._pos_c, self.mass, self.ptype,
+                                               self._energy_sum])
             wp.launch(k.census_check, dim=1, inputs=[p, self._energy_sum, self._clump_count, self._fail],
                       device=dev)
         wp.launch(k.exclusion_check, dim=1, inputs=[p, self._clock, self._pending, self._pending_mass,

@@ -35,6 +35,7 @@ def build(scalar):
         lj_r0: scalar
         mk_k: scalar
         mk_beta: scalar
+        mk_d: scalar  # the Monaghan-Kajtar force's singular distance
         plane_r0: scalar
         delta_hc0: scalar  # delta h c0, 0 when density diffusion is off
         xsph_eps: scalar  # 0 when XSPH is off
