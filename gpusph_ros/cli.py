@@ -227,8 +227,8 @@ def stability_main(argv=None):
     from .study import stability as st
 
     parser = argparse.ArgumentParser(prog="gpusph-stability", description="Largest stable CFL and smallest stable "
-                                     "sound speed of each kernel x viscosity x boundary x density treatment on a "
-                                     "small dam break, and how each failure showed itself.")
+                                     "sound speed of each kernel x viscosity x boundary x density treatment x "
+                                     "shifting x XSPH on a small dam break, and how each failure showed itself.")
     parser.add_argument("--out", default="runs/stability", help="folder for stability.csv, .md and the map")
     parser.add_argument("--scene", default="collapse_2d")
     parser.add_argument("--dx", type=float, default=0.05715 / 10)
@@ -238,13 +238,13 @@ def stability_main(argv=None):
     parser.add_argument("--device", default="cpu")
     parser.add_argument("--report", action="store_true", help="only redraw the table and map from stability.csv")
     for name, choices in (("kernels", st.KERNELS), ("viscosities", st.VISCOSITIES), ("boundaries", st.BOUNDARIES),
-                          ("densities", st.DENSITIES)):
+                          ("densities", st.DENSITIES), ("shifting", st.SWITCHES), ("xsph", st.SWITCHES)):
         parser.add_argument(f"--{name}", nargs="+", choices=choices, default=list(choices))
     args = parser.parse_args(argv)
     if args.report:
         print("\n".join(f"wrote {p}" for p in st.report(args.out)))
         return 0
-    combos = st.combinations(args.kernels, args.viscosities, args.boundaries, args.densities)
+    combos = st.combinations(args.kernels, args.viscosities, args.boundaries, args.densities, args.shifting, args.xsph)
     print(f"gpusph-stability: {len(combos)} combinations of {args.scene} at dx = {args.dx:g} m to t = "
           f"{args.end_time:g} s on {args.device}, {args.workers} at a time", flush=True)
     st.run_study(args.out, args.scene, args.end_time, args.dx, args.iterations, args.workers, combos, args.device,

@@ -33,10 +33,10 @@ def test_search_for_the_smallest_stable_value_and_the_ends():
 
 def test_combinations_and_their_settings():
     combos = st.combinations()
-    assert len(combos) == 3 * 3 * 5 * 3 == 135
-    planes = st.Combination("wendland", "sps", "planes", "shepard").settings()
+    assert len(combos) == 3 * 3 * 5 * 3 * 2 * 2 == 540
+    planes = st.Combination("wendland", "sps", "planes", "shepard", xsph="on").settings()
     assert planes == {"kernel": "wendland", "viscosity": "sps", "density_diffusion": "none", "shepard_every": 40,
-                      "wall_planes": True}
+                      "shifting": False, "xsph": True, "wall_planes": True}
     assert st.Combination("quadratic", "laminar", "dynamic", "delta").settings()["boundary"] == "dynamic"
 
 
@@ -57,7 +57,9 @@ def test_table_and_map(tmp_path):
     assert st.read(tmp_path / "stability.csv")[0]["cfl_max"] == 0.6
     md, png = st.report(tmp_path)
     text = md.read_text()
-    assert "| wendland | artificial | dynamic | delta | 0.6 | density_bounds | 3.1 | wall_penetration |" in text
-    assert "| quadratic | sps | planes | none | fails | non_finite | fails | non_finite |" in text
+    # rows of a table from before the shifting and XSPH dimensions read as both off
+    assert "| wendland | artificial | dynamic | delta | off | off | 0.6 | density_bounds | 3.1 | wall_penetration |" \
+        in text
+    assert "| quadratic | sps | planes | none | off | off | fails | non_finite | fails | non_finite |" in text
     assert png.stat().st_size > 10_000
     assert math.isfinite(rows[0]["cfl_max"])

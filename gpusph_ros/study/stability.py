@@ -1,6 +1,6 @@
 """Where a method fails: the largest stable CFL number and the smallest stable sound-speed
-coefficient of each combination of kernel x viscosity x boundary x density treatment, on a small
-dam break, and how each failure showed itself.
+coefficient of each combination of kernel x viscosity x boundary x density treatment x particle
+shifting x XSPH, on a small dam break, and how each failure showed itself.
 
 A run is stable when it reaches the end time with every health check quiet (``sph.health.CHECKS``:
 NaN, leaving the domain, density bounds, wall penetration, a step's displacement, clumping, energy
@@ -12,6 +12,8 @@ the sound-speed search keeps CFL 0.3.
 Boundaries: ``lennard_jones``, ``monaghan_kajtar`` and ``dynamic`` walls of boundary particles,
 ``planes`` particle-less walls (``scenes.reduce`` wall_planes). Density treatments: ``none``,
 ``shepard`` (thesis Eq. 2.28 every 40 steps, as the thesis ran it), ``delta`` (delta-SPH).
+Shifting (Lind et al. 2012, DualSPHysics' coefficients) and XSPH (thesis Eq. 2.22, eps 0.5) are
+each ``off`` or ``on``.
 """
 from __future__ import annotations
 
@@ -28,11 +30,12 @@ KERNELS = ("quadratic", "cubic_spline", "wendland")
 VISCOSITIES = ("artificial", "laminar", "sps")
 BOUNDARIES = ("lennard_jones", "monaghan_kajtar", "planes", "dynamic", "mdbc")
 DENSITIES = ("none", "shepard", "delta")
+SWITCHES = ("off", "on")  # shifting, XSPH
 CFL_RANGE = (0.1, 1.0)
 C0_RANGE = (2.0, 20.0)
 C0_SEARCH_CFL = 0.3  # the CFL of the sound-speed search, where docs/stability was measured
-COLUMNS = ("kernel", "viscosity", "boundary", "density", "cfl_max", "cfl_failure", "c0_coef_min", "c0_failure",
-           "runs", "wall_s")
+COLUMNS = ("kernel", "viscosity", "boundary", "density", "shifting", "xsph", "cfl_max", "cfl_failure", "c0_coef_min",
+           "c0_failure", "runs", "wall_s")
 
 
 @dataclass(frozen=True)
@@ -41,12 +44,15 @@ class Combination:
     viscosity: str
     boundary: str
     density: str
+    shifting: str = "off"
+    xsph: str = "off"
 
     def settings(self) -> dict:
         """Run settings (``scenes.settings.resolve`` keys) of this combination."""
         out = {"kernel": self.kernel, "viscosity": self.viscosity,
                "density_diffusion": "delta" if self.density == "delta" else "none",
-               "shepard_every": 40 if self.density == "shepard" else 0}
+               "shepard_every": 40 if self.density == "shepard" else 0,
+               "shifting": self.shifting == "on", "xsph": self.xsph == "on"}
         if self.boundary == "planes":
             out["wall_planes"] = True
         else:
@@ -54,8 +60,9 @@ class Combination:
         return out
 
 
-def combinations(kernels=KERNELS, viscosities=VISCOSITIES, boundaries=BOUNDARIES, densities=DENSITIES) -> list:
-    return [Combination(*c) for c in itertools.product(kernels, viscosities, boundaries, densities)]
+def combinations(kernels=KERNELS, viscosities=VISCOSITIES, boundaries=BOUNDARIES, densities=DENSITIES,
+                 shiftings=SWITCHES, xsphs=SWITCHES) -> list:
+    return [Combination(*c) for c in itertools.product(kernels, viscosities, boundaries, densities, shiftings, xsphs)]
 
 
 def trial(scene_name: str, settings: dict) -> str:
@@ -122,8 +129,9 @@ def limits(combination: Combination, scene: str, end_time: float, dx: float, ite
     c0, c0_failure, c0_runs = search(lambda x: trial(scene, {**base, "cfl": C0_SEARCH_CFL, "c0_coef": x}), *C0_RANGE,
                                      "hi", iterations)
     return {"kernel": combination.kernel, "viscosity": combination.viscosity, "boundary": combination.boundary,
-            "density": combination.density, "cfl_max": cfl, "cfl_failure": cfl_failure, "c0_coef_min": c0,
-            "c0_failure": c0_failure, "runs": cfl_runs + c0_runs, "wall_s": round(time.perf_counter() - start, 1)}
+            "density": combination.density, "shifting": combination.shifting, "xsph": combination.xsph,
+            "cfl_max": cfl, "cfl_failure": cfl_failure, "c0_coef_min": c0, "c0_failure": c0_failure,
+            "runs": cfl_runs + c0_runs, "wall_s": round(time.perf_counter() - start, 1)}
 
 
 def run_study(out_dir, scene: str = "collapse_2d", end_time: float = 0.3, dx: float = 0.05715 / 10,
@@ -142,7 +150,7 @@ def run_study(out_dir, scene: str = "collapse_2d", end_time: float = 0.3, dx: fl
             write(rows, out_dir / "stability.csv")
             if progress:
                 r = rows[-1]
-                progress(f"[{len(rows)}/{len(combos)}] {r['kernel']} {r['viscosity']} {r['boundary']} {r['density']}: "
+                progress(f"[{len(rows)}/{len(combos)}] {label(r)}: "
                          f"CFL <= {fmt(r['cfl_max'])} ({r['cfl_failure'] or 'none'}), c0 >= {fmt(r['c0_coef_min'])} "
                          f"sqrt(gH) ({r['c0_failure'] or 'none'}), {r['runs']} runs, {r['wall_s']} s")
     report(out_dir)
@@ -174,18 +182,27 @@ def read(path) -> list:
         for row in csv.DictReader(fh):
             for key in ("cfl_max", "c0_coef_min", "wall_s", "runs"):
                 row[key] = None if row[key] in ("", "None") else float(row[key])
+            for key in ("shifting", "xsph"):  # a table from before these dimensions: both off
+                row[key] = row.get(key) or "off"
             rows.append(row)
     return rows
 
 
 def table(rows) -> str:
     """A Markdown table: one line a combination."""
-    lines = ["| kernel | viscosity | boundary | density | largest stable CFL | fails by | smallest stable c0 "
-             "[sqrt(gH)] | fails by |", "|---|---|---|---|---|---|---|---|"]
+    lines = ["| kernel | viscosity | boundary | density | shifting | XSPH | largest stable CFL | fails by | "
+             "smallest stable c0 [sqrt(gH)] | fails by |", "|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        lines.append(f"| {r['kernel']} | {r['viscosity']} | {r['boundary']} | {r['density']} | {fmt(r['cfl_max'])} | "
+        lines.append(f"| {r['kernel']} | {r['viscosity']} | {r['boundary']} | {r['density']} | {r['shifting']} | "
+                     f"{r['xsph']} | {fmt(r['cfl_max'])} | "
                      f"{r['cfl_failure'] or '-'} | {fmt(r['c0_coef_min'])} | {r['c0_failure'] or '-'} |")
     return "\n".join(lines)
+
+
+def label(row) -> str:
+    """A combination in one line, its switches named only when on."""
+    extras = [name for name in ("shifting", "xsph") if row.get(name) == "on"]
+    return " ".join([row["kernel"], row["viscosity"], row["boundary"], row["density"], *extras])
 
 
 ABBREVIATIONS = {"non_finite": "N", "outside_domain": "O", "density_bounds": "D", "wall_penetration": "W",
@@ -194,7 +211,7 @@ ABBREVIATIONS = {"non_finite": "N", "outside_domain": "O", "density_bounds": "D"
 
 
 def chart(rows, path):
-    """The stability map: rows kernel x viscosity, columns boundary x density; colour the limit,
+    """The stability map: rows kernel x viscosity x shifting x XSPH, columns boundary x density; colour the limit,
     letter the failure past it (N NaN, O out of domain, D density, W wall penetration, M displacement,
     C clumping, E energy growth, X excluded fraction, L neighbour-list overflow); grey and x where
     even the safe end fails."""
@@ -204,18 +221,19 @@ def chart(rows, path):
     import matplotlib.pyplot as plt
     import numpy as np
 
-    ys = [(k, v) for k in KERNELS for v in VISCOSITIES if any(r["kernel"] == k and r["viscosity"] == v for r in rows)]
+    present = {(r["kernel"], r["viscosity"], r["shifting"], r["xsph"]) for r in rows}
+    ys = [y for y in itertools.product(KERNELS, VISCOSITIES, SWITCHES, SWITCHES) if y in present]
     xs = [(b, d) for b in BOUNDARIES for d in DENSITIES if any(r["boundary"] == b and r["density"] == d for r in rows)]
-    at = {(r["kernel"], r["viscosity"], r["boundary"], r["density"]): r for r in rows}
+    at = {(r["kernel"], r["viscosity"], r["shifting"], r["xsph"], r["boundary"], r["density"]): r for r in rows}
     fig, axes = plt.subplots(1, 2, figsize=(16, 0.45 * len(ys) + 2.5), constrained_layout=True)
     for ax, key, failure, title, cmap, lo_hi in (
             (axes[0], "cfl_max", "cfl_failure", "largest stable CFL (higher is better)", "viridis", CFL_RANGE),
             (axes[1], "c0_coef_min", "c0_failure", "smallest stable c0 / sqrt(gH) (lower is better)", "viridis_r",
              C0_RANGE)):
         grid = np.full((len(ys), len(xs)), np.nan)
-        for i, (k, v) in enumerate(ys):
-            for j, (b, d) in enumerate(xs):
-                r = at.get((k, v, b, d))
+        for i, y in enumerate(ys):
+            for j, x in enumerate(xs):
+                r = at.get((*y, *x))
                 if r is None:
                     continue
                 if r[key] is not None:
@@ -226,12 +244,13 @@ def chart(rows, path):
         colours = plt.get_cmap(cmap).with_extremes(bad="0.88")  # grey: unstable even at the safe end
         image = ax.imshow(grid, cmap=colours, vmin=lo_hi[0], vmax=lo_hi[1], aspect="auto")
         ax.set_xticks(range(len(xs)), [f"{b}\n{d}" for b, d in xs], rotation=90, fontsize=7)
-        ax.set_yticks(range(len(ys)), [f"{k} / {v}" for k, v in ys], fontsize=7)
+        ax.set_yticks(range(len(ys)), [" / ".join([k, v] + [n for n, on in (("shifting", sh), ("XSPH", xs_))
+                                                              if on == "on"]) for k, v, sh, xs_ in ys], fontsize=7)
         ax.set_title(title, fontsize=9)
         fig.colorbar(image, ax=ax, shrink=0.8)
     fig.suptitle("Stability map (letter: how the first unstable value failed; N NaN, O out of domain, D density, "
-                 "W wall penetration, C clumping, E energy growth, L list overflow; "
-                 "grey, x: fails even at the safe end)",
+                 "W wall penetration, M displacement, C clumping, E energy growth, X excluded fraction, "
+                 "L list overflow; grey, x: fails even at the safe end)",
                  fontsize=9)
     fig.savefig(path, dpi=110)
     plt.close(fig)
