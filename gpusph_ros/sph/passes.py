@@ -51,7 +51,8 @@ def _force_passes(scalar):
     Sh = shifting.build(scalar)
     concentration_terms, shift_velocity = Sh.concentration_terms, Sh.shift_velocity
     B = boundaries.build(scalar)
-    lennard_jones, monaghan_kajtar, plane_wall = B.lennard_jones, B.monaghan_kajtar, B.plane_wall
+    lennard_jones, monaghan_kajtar, plane_wall, plane_corners = B.lennard_jones, B.monaghan_kajtar, B.plane_wall, \
+        B.plane_corners
     lj_potential, mk_potential = B.lennard_jones_potential, B.monaghan_kajtar_potential
     N = neighbours.grid(scalar)
     Grid, separation = N.Grid, N.separation
@@ -180,6 +181,9 @@ def _force_passes(scalar):
                                          p_i, rho_i, ui, p.lj_d, p.plane_r0)
                     a += da
                     dr += ddr
+                if p.n_planes > 1:
+                    a += plane_corners(p.kernel, p.norm, p.inv_h, p.dim, xi, plane_point, plane_normal, p.n_planes,
+                                       p_i, rho_i)
             track_max(maxima, 2 * chunk, wp.length(a))
             track_max(maxima, 2 * chunk + 1, mu_max)
         elif p.boundary == DYNAMIC or f.body[i] >= 0:
