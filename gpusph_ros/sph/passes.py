@@ -26,7 +26,7 @@ FLUID = state.FLUID
 BOUNDARY = state.BOUNDARY
 EXCLUDED = state.EXCLUDED
 DYNAMIC = boundaries.BOUNDARY_ID["dynamic"]  # and mdbc above it: particle walls with a density
-LENNARD_JONES = boundaries.BOUNDARY_ID["lennard_jones"]
+LENNARD_JONES = boundaries.LENNARD_JONES
 ARTIFICIAL = viscosity.VISCOSITY_ID["artificial"]
 SPS = viscosity.VISCOSITY_ID["sps"]
 
@@ -51,8 +51,8 @@ def _force_passes(scalar):
     Sh = shifting.build(scalar)
     concentration_terms, shift_velocity = Sh.concentration_terms, Sh.shift_velocity
     B = boundaries.build(scalar)
-    lennard_jones, monaghan_kajtar, plane_wall, plane_corners = B.lennard_jones, B.monaghan_kajtar, B.plane_wall, \
-        B.plane_corners
+    lennard_jones, monaghan_kajtar = B.lennard_jones, B.monaghan_kajtar
+    plane_wall, plane_corners = B.plane_wall, B.plane_corners
     lj_potential, mk_potential = B.lennard_jones_potential, B.monaghan_kajtar_potential
     N = neighbours.grid(scalar)
     Grid, separation = N.Grid, N.separation

@@ -30,7 +30,8 @@ KERNELS = ("quadratic", "cubic_spline", "wendland")
 VISCOSITIES = ("artificial", "laminar", "sps")
 BOUNDARIES = ("lennard_jones", "monaghan_kajtar", "planes", "dynamic", "mdbc")
 DENSITIES = ("none", "shepard", "delta")
-SWITCHES = ("off", "on")  # shifting, XSPH
+SWITCHES = ("off", "on")
+SWITCHED = ("shifting", "xsph")  # the dimensions that are off or on
 CFL_RANGE = (0.1, 1.0)
 C0_RANGE = (2.0, 20.0)
 C0_SEARCH_CFL = 0.3  # the CFL of the sound-speed search, where docs/stability was measured
@@ -182,7 +183,7 @@ def read(path) -> list:
         for row in csv.DictReader(fh):
             for key in ("cfl_max", "c0_coef_min", "wall_s", "runs"):
                 row[key] = None if row[key] in ("", "None") else float(row[key])
-            for key in ("shifting", "xsph"):  # a table from before these dimensions: both off
+            for key in SWITCHED:  # a table from before these dimensions: both off
                 row[key] = row.get(key) or "off"
             rows.append(row)
     return rows
@@ -201,7 +202,7 @@ def table(rows) -> str:
 
 def label(row) -> str:
     """A combination in one line, its switches named only when on."""
-    extras = [name for name in ("shifting", "xsph") if row.get(name) == "on"]
+    extras = [name for name in SWITCHED if row.get(name) == "on"]
     return " ".join([row["kernel"], row["viscosity"], row["boundary"], row["density"], *extras])
 
 
