@@ -95,26 +95,3 @@ def test_plane_corners_count_the_region_behind_two_walls_once(dim):
     touching = sum((x[:, k] < DX) | (x[:, k] > size[k] - DX) for k in range(dim - 1)) + (x[:, dim - 1] < DX)
     one_wall = error[touching == 1].max()
     assert error[touching >= 2].max() < 1.5 * one_wall
-
-
-def test_dynamic_walls_never_fall_below_rest_density():
-    """Dynamic boundary particles take their density from continuity; where the fluid runs off a
-    wall (the column's back wall and the floor behind the surge of the 2D collapse, a/15, to the
-    impact on the far wall) it would fall below rho0 and the wall's negative pressure would pull
-    fluid into it. The floor at rho0 (DualSPHysics' "to prevent absorption of fluid particles by
-    boundaries") holds it there; without it 3-25 of the 510 wall particles sit below rho0 at every
-    sample, the lowest at 0.967 rho0, a suction of about 3 rho0 g H at c0 = 10 sqrt(g H)."""
-    from gpusph_ros.scenes.build import build
-    from gpusph_ros.scenes.schema import load_scene
-    from gpusph_ros.sph import Solver
-    from gpusph_ros.sph.state import BOUNDARY
-
-    scene = load_scene("collapse_2d")
-    model = build(scene, dx=scene.fluid[0].hi[0] / 15)
-    solver = Solver(model.config, model.particles)
-    lowest = np.inf
-    for t in np.arange(0.02, 0.161, 0.02):
-        solver.advance(t)
-        snap = solver.snapshot()
-        lowest = min(lowest, snap["rho"][snap["ptype"] == BOUNDARY].min())
-    assert lowest >= model.config.rho0

@@ -297,17 +297,12 @@ def _time_passes(scalar):
         rho_out = rho + f dt drho.
 
         f = 1/2 with the rates at n (predictor), f = 1 with the rates at n + 1/2 (corrector).
-        Boundary particles keep position and velocity; dynamic ones update density, never below
-        rho0: a wall whose density fell under rho0 would pull fluid into it with its negative
-        pressure (DualSPHysics floors DBC and mDBC-1 densities at RhopZero in every integrator, "to
-        prevent absorption of fluid particles by boundaries", JSphCpuSingle::ComputeSymplecticPre).
+        Boundary particles keep position and velocity; dynamic ones update density.
         """
         i = wp.tid()
         dt = factor * scalar(clock[1])
         rho_out[i] = rho[i] + dt * drho[i]
         if ptype[i] != FLUID:
-            if p.boundary == DYNAMIC and ptype[i] == BOUNDARY:
-                rho_out[i] = wp.max(rho_out[i], p.rho0)
             pos_out[i] = pos[i]
             vel_out[i] = vel[i]
             return
