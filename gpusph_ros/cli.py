@@ -14,6 +14,7 @@ health check or was interrupted (its recording is closed and readable), 1 bad in
 import argparse
 import signal
 import sys
+import threading
 import time
 
 
@@ -35,10 +36,6 @@ def _progress(run, stream=sys.stdout):
     if tty or last or run.next_output % step == 0:
         stream.write(("\r" if tty else "") + line + ("\n" if (last or not tty) else ""))
         stream.flush()
-
-
-def _sigterm(signum, frame):
-    raise KeyboardInterrupt
 
 
 def run_main(argv=None):
@@ -74,9 +71,12 @@ def run_main(argv=None):
         print(f"gpusph-run: {err}", file=sys.stderr)
         return 1
     print(f"{run.summary()} -> {args.out}", flush=True)
-    signal.signal(signal.SIGTERM, _sigterm)
+    # SIGTERM only asks the run to stop between two steps: an exception raised wherever the
+    # signal lands (inside the MCAP writer, say) could leave the recording unclosable
+    stop = threading.Event()
+    signal.signal(signal.SIGTERM, lambda signum, frame: stop.set())
     start = time.perf_counter()
-    result = run.execute(recorder, progress=None if args.quiet else _progress)
+    result = run.execute(recorder, progress=None if args.quiet else _progress, stop=stop.is_set)
     print(f"{result['status']}: {result['steps']} steps, t = {result['simulated_time_s']:.4g} s, wall "
           f"{time.perf_counter() - start:.1f} s, {result['mipps']} MIPPS; {R.excluded_line(result)}; recorded "
           f"{recorder.count} messages to {args.out}", flush=True)

@@ -131,16 +131,19 @@ class Run:
     def mipps(self) -> float:
         return self.solver.n * self.solver.steps / max(self.wall, 1e-9) / 1e6
 
-    def execute(self, recorder=None, progress=None) -> dict:
+    def execute(self, recorder=None, progress=None, stop=None) -> dict:
         """Run to the end time, recording each output; returns the result record (status,
         wall time, steps, MIPPS). A HealthError or a neighbour-list overflow ends the run with
-        status 'failed'; an interrupt
-        (Ctrl-C, SIGTERM turned into KeyboardInterrupt) with 'interrupted'. The recording is
-        closed either way."""
+        status 'failed'; Ctrl-C, or ``stop`` (a callable asked between steps) answering true, with
+        'interrupted'. The recording is closed either way."""
         status = "completed"
         try:
             while not self.done:
-                for topic, msg in self.step_output():
+                msgs = self.step_output(stop)
+                if msgs is None:
+                    status = "interrupted"
+                    break
+                for topic, msg in msgs:
                     if recorder is not None:
                         recorder.write(topic, msg, self.solver.time)
                 if progress is not None:

@@ -98,8 +98,10 @@ def test_mcap_ros2_reader_decodes_the_file_and_metadata_describes_the_run(record
 
 def _start(out, *extra):
     env = dict(os.environ, PYTHONUNBUFFERED="1")
-    return subprocess.Popen([sys.executable, "-m", "gpusph_ros.cli", "run", "collapse_2d", "--set", "dx=0.003",
-                             "--set", "end_time=5", "--set", "particle_rate=100", "--quiet", "--out", str(out), *extra],
+    # -X faulthandler: a run that hangs can be made to print where (SIGABRT, see the SIGTERM test)
+    return subprocess.Popen([sys.executable, "-X", "faulthandler", "-m", "gpusph_ros.cli", "run", "collapse_2d",
+                             "--set", "dx=0.003", "--set", "end_time=5", "--set", "particle_rate=100", "--quiet",
+                             "--out", str(out), *extra],
                             cwd=REPO, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
 
 
@@ -155,7 +157,12 @@ def test_sigterm_finishes_the_file(tmp_path):
     proc = _start(out)
     _wait_for_size(proc, out, 1 << 20)
     proc.send_signal(signal.SIGTERM)
-    assert proc.wait(timeout=60) == 2
+    try:
+        code = proc.wait(timeout=60)
+    except subprocess.TimeoutExpired:
+        proc.send_signal(signal.SIGABRT)  # faulthandler prints every thread's stack
+        pytest.fail("the run did not finish within 60 s of SIGTERM:\n" + proc.communicate(timeout=30)[0])
+    assert code == 2, proc.stdout.read()
     with AnyReader([out]) as reader:
         assert reader.message_count > 0
     rec = read(out)
