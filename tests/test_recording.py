@@ -178,3 +178,22 @@ def test_a_failed_run_keeps_what_it_recorded_and_says_why(tmp_path):
         assert reader.message_count > 0  # output 0, the initial state
     rec = read(tmp_path / "failed")
     assert rec.complete and rec.result["status"] == result["status"]
+
+
+def test_a_stop_request_ends_the_run_between_steps_and_closes_the_file(tmp_path):
+    """What gpusph-run's SIGTERM handler does: ``stop`` answering true ends the run at the next
+    step with status 'interrupted', the steps taken so far kept and the recording closed whole."""
+    scene = load_scene("collapse_2d")
+    run = Run(scene, resolve(scene, sets=["dx=0.0076", "end_time=0.3"]))
+    asked = []
+
+    def stop():  # asked before every step (and after each batch): true from the 40th question on
+        asked.append(True)
+        return len(asked) >= 40
+
+    result = run.execute(run.open_recording(tmp_path / "stopped"), stop=stop)
+    assert result["status"] == "interrupted" and 0 < result["steps"] < 40  # no step without a question
+    assert run.solver.time < 0.3
+    rec = read(tmp_path / "stopped")
+    assert rec.complete and rec.result["status"] == "interrupted"
+    assert 0 < len(rec.clock) == run.next_output  # every output reached was recorded
