@@ -21,10 +21,13 @@ run: $(STAMP)
 	$(BIN)/gpusph-run dambreak1_thesis --set dx=0.03 --set end_time=1.0 --out $(RUN_DIR)
 	$(BIN)/gpusph-analyze $(RUN_DIR)
 
-# every test, the lint among them (tests/test_lint.py); markers unit, physics, ros, study (pytest.ini);
-# the 15 slowest are listed, to watch the 15-minute budget on a 2-core CI machine
+# every test, the lint among them (tests/test_lint.py); markers unit, physics, ros, study (pytest.ini).
+# Warp's cpu device runs a kernel on one core, so the solver tests run one per core (pytest-xdist);
+# the node, recording and study tests start processes of their own and time what they answer, so
+# they run alone after them. The slowest are listed, to watch the 15-minute budget on 2 cores.
 test: $(STAMP)
-	$(BIN)/python -m pytest -q --durations=15 tests
+	$(BIN)/python -m pytest -q -n auto --dist worksteal --durations=15 -m "unit or physics" tests
+	$(BIN)/python -m pytest -q --durations=5 -m "ros or study" tests
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
