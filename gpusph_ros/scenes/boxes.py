@@ -4,7 +4,8 @@ Conventions: the vertical axis is the last one of the dimension (y in 2D, z in 3
 floor is at 0 on that axis; a tank is open at the top. Fluid particles sit at the cell centres
 of a lattice of spacing at most dx, squeezed by less than one cell per box so that each fluid box
 is filled exactly: the first layer lies half a spacing from a wall and the top layer half a spacing
-below the stated surface. Boundary particles continue the dx lattice outside the walls.
+below the stated surface. Boundary particles lie in layers dx apart from dx/2 outside each wall face
+and follow the fluid's lattice along it.
 """
 from __future__ import annotations
 
@@ -54,17 +55,40 @@ def fill_box(lo, hi, dx: float, dim: int):
     return pts, float(np.prod(spacing))
 
 
-def wall_particles(hi, dx: float, dim: int, layers: int, periodic=(False, False, False)) -> np.ndarray:
-    """``layers`` layers of lattice points outside the walls of the open-top tank [0, hi]
-    (no walls across periodic axes)."""
-    pad = [0.0 if periodic[ax] else layers * dx for ax in range(dim)]
-    lo_out = [-pad[ax] for ax in range(dim)]
-    hi_out = [hi[ax] + pad[ax] for ax in range(dim - 1)] + [hi[dim - 1]]
-    pts = lattice(lo_out, hi_out, dx, dim)
+def _wall_axis(length: float, dx: float, layers: int, walls: int):
+    """Coordinates along one axis of a tank [0, length] and the spacing each stands for: inside,
+    fill_box's lattice (the whole number of cells no wider than dx); beyond each of the ``walls``
+    faces (0, 1: the floor, 2: both ends), ``layers`` layers dx apart from dx/2 out."""
+    n = max(1, int(np.ceil(length / dx - 1e-9)))
+    inner = (np.arange(n) + 0.5) * (length / n)
+    out = (np.arange(layers) + 0.5) * dx
+    coords = [-out[::-1], inner] + ([length + out] if walls == 2 else [])
+    widths = [np.full(layers, dx), np.full(n, length / n)] + ([np.full(layers, dx)] if walls == 2 else [])
+    if walls == 0:
+        coords, widths = coords[1:], widths[1:]
+    return np.concatenate(coords), np.concatenate(widths)
+
+
+def wall_particles(hi, dx: float, dim: int, layers: int, periodic=(False, False, False)):
+    """``layers`` layers of points outside the walls of the open-top tank [0, hi] (no walls across
+    periodic axes), and the volume each stands for. Each wall's layers lie dx/2, 3 dx/2, ... from
+    its own face, so the fluid's outer layer (fill_box) is dx from every wall whether or not the
+    tank is a whole number of dx long; along a wall they follow the fluid's lattice. (A dx lattice
+    from the origin put the far side wall of DamBreak 1's 0.67 m tank 1 dx out at dx = 2 cm and
+    0.17 dx out at 3 cm, where fluid then crossed the face.)"""
+    up = dim - 1
+    axes = [_wall_axis(hi[ax], dx, layers, 0 if periodic[ax] else 1 if ax == up else 2) for ax in range(dim)]
+    grids = np.meshgrid(*[c for c, _ in axes], indexing="ij")
+    sizes = np.meshgrid(*[w for _, w in axes], indexing="ij")
+    pts = np.zeros((grids[0].size, 3))
+    volume = np.ones(grids[0].size)
+    for ax in range(dim):
+        pts[:, ax] = grids[ax].ravel()
+        volume *= sizes[ax].ravel()
     inside = np.ones(len(pts), dtype=bool)
     for ax in range(dim):
         inside &= (pts[:, ax] > 0.0) & (pts[:, ax] < hi[ax])
-    return pts[~inside]
+    return pts[~inside], volume[~inside]
 
 
 def wall_shell(hi, dx: float, dim: int, spacing: float, periodic=(False, False, False)) -> np.ndarray:
@@ -167,16 +191,18 @@ def box_tank(cfg: SolverConfig, tank, fluid_boxes, walls="particles", headroom: 
     fluid = np.concatenate(fluid)
     rho = np.concatenate(rho)
     layers = 0
-    wall = np.zeros((0, 3))
+    wall, wall_volume = np.zeros((0, 3)), np.zeros(0)
     if len(plane_faces) < len(kinds):
         layers = boundary_layers(cfg.boundary, cfg.hdx)
         if cfg.boundary in DENSITY_WALLS:
-            wall = wall_particles(tank, dx, dim, layers, periodic)
+            wall, wall_volume = wall_particles(tank, dx, dim, layers, periodic)
         else:
             spacing = dx / cfg.mk_beta if cfg.boundary == "monaghan_kajtar" else dx
             wall = wall_shell(tank, dx, dim, spacing, periodic)
+            wall_volume = np.full(len(wall), dx ** dim)
         # a particle wall stops where a plane takes over
-        wall = wall[~beyond_faces(wall, tank, dim, plane_faces)]
+        kept = ~beyond_faces(wall, tank, dim, plane_faces)
+        wall, wall_volume = wall[kept], wall_volume[kept]
     surface = max(hi[up] for _, hi in fluid_boxes)
     wall_rho = hydrostatic_density(surface - wall[:, up], cfg.rho0, cfg.eos_b, cfg.gamma, g)
     planes = tank_planes(tank, dim, periodic, plane_faces)
@@ -197,7 +223,7 @@ def box_tank(cfg: SolverConfig, tank, fluid_boxes, walls="particles", headroom: 
         pos=np.concatenate([fluid, wall]),
         vel=np.zeros((n_f + n_w, 3)),
         rho=np.concatenate([rho, wall_rho]),
-        mass=np.concatenate(mass + [np.full(n_w, cfg.rho0 * dx ** dim)]),
+        mass=np.concatenate(mass + [cfg.rho0 * wall_volume]),
         ptype=np.concatenate([np.full(n_f, FLUID), np.full(n_w, BOUNDARY)]),
     )
     return cfg, particles
