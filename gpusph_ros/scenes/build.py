@@ -3,7 +3,8 @@
 Fluid boxes are filled exactly (``boxes.fill_box``: top layer half a spacing below the stated
 surface, mass = rho0 x box volume). The wet bed covers the floor outside the fluid boxes'
 and obstacles' footprints, cut into rectangles that are each filled exactly. Obstacles are boxes of
-boundary particles on the dx lattice, a wall's thickness deep, each its own body.
+boundary particles on a lattice that fills each exactly (``block_particles``), a wall's thickness
+deep, each its own body.
 """
 from dataclasses import dataclass
 
@@ -13,7 +14,7 @@ from ..sph.config import ConfigError, Plane, SolverConfig, check_device
 from ..sph.solver import Particles
 from ..sph.state import BOUNDARY, FLUID
 from . import reduce, resources
-from .boxes import boundary_layers, box_tank, lattice
+from .boxes import boundary_layers, box_tank, fill_box
 from .schema import Scene
 
 
@@ -34,6 +35,24 @@ class Model:
 
 def _inside(pts, lo, hi, dim):
     return np.all((pts[:, :dim] >= np.asarray(lo[:dim])) & (pts[:, :dim] <= np.asarray(hi[:dim])), axis=1)
+
+
+def block_particles(lo, hi, dx: float, dim: int, layers: int, lid: bool):
+    """Boundary particles of an obstacle box [lo, hi] standing on the floor, and the volume each
+    stands for: fill_box's lattice (the outer layer half a spacing, at most dx/2, in from each face,
+    where the fluid meets a tank wall, whatever the block's size), ``layers`` deep from each side
+    face and, with ``lid``, from the top."""
+    pts, volume = fill_box(lo, hi, dx, dim)
+    up = dim - 1
+    shell = np.zeros(len(pts), dtype=bool)
+    for ax in range(dim):
+        n = max(1, int(np.ceil((hi[ax] - lo[ax]) / dx - 1e-9)))
+        k = np.floor((pts[:, ax] - lo[ax]) / (hi[ax] - lo[ax]) * n).astype(int)  # the cell index
+        if ax != up:
+            shell |= (k < layers) | (k >= n - layers)
+        elif lid:
+            shell |= k >= n - layers
+    return pts[shell], volume
 
 
 def floor_rectangles(extent, footprints, dim: int) -> list:
@@ -102,16 +121,12 @@ def build(scene: Scene, **numerics) -> Model:
     layers = boundary_layers(cfg.boundary, cfg.hdx)
     bodies = {}
     for k, o in enumerate(scene.obstacles):
-        # boundary particles on the lattice, a wall's thickness in from each side face and from the
-        # top of a block lower than the tank (one as tall stands out of the water: no lid needed)
-        block = lattice(o.lo, o.hi, dx, dim)
-        lid = o.hi[up] < scene.tank[up] - 1e-9
-        inner_lo = [o.lo[ax] + layers * dx if ax != up else -np.inf for ax in range(dim)]
-        inner_hi = [o.hi[ax] - layers * dx if ax != up or lid else np.inf for ax in range(dim)]
-        block = block[~_inside(block, inner_lo, inner_hi, dim)]
+        # a wall's thickness in from each side face and from the top of a block lower than the tank
+        # (one as tall stands out of the water: no lid needed)
+        block, volume = block_particles(o.lo, o.hi, dx, dim, layers, lid=o.hi[up] < scene.tank[up] - 1e-9)
         pos.append(block)
         rho.append(np.full(len(block), cfg.rho0))  # mostly dry at the start; dynamic ones adjust
-        mass.append(np.full(len(block), cfg.rho0 * dx ** dim))
+        mass.append(np.full(len(block), cfg.rho0 * volume))
         ptype.append(np.full(len(block), BOUNDARY))
         body.append(np.full(len(block), k, dtype=np.int32))
         bodies[o.name] = k
