@@ -29,6 +29,12 @@ from gpusph_ros.scenes.schema import load_scene
 
 from ros_client import Client
 
+
+def particles(scene: str, dx: float) -> int:
+    """The particle count the scene builds to at dx: what the node must report and publish."""
+    return len(build(load_scene(scene), dx=dx).particles)
+
+
 pytestmark = pytest.mark.ros
 
 REPO = Path(__file__).resolve().parents[1]
@@ -197,7 +203,7 @@ def test_ros2_run_lookup_finds_the_installed_executable(workspace, sourced):
 def test_the_node_runs_and_reports_itself_on_diagnostics(client):
     status = _diagnostic(client, lambda s: s["state"] == "running" and int(s.get("steps", 0)) > 0)
     assert status["level"] == DiagnosticStatus.OK
-    assert status["scene"] == "dambreak1_thesis" and int(status["particles"]) == 4385
+    assert status["scene"] == "dambreak1_thesis" and int(status["particles"]) == particles("dambreak1_thesis", 0.06)
     assert status["device"] == "cpu" and status["precision"] == "float32"
     for key in ("simulated_time", "dt", "steps", "steps_per_s", "mipps", "real_time_factor", "error"):
         assert key in status
@@ -239,9 +245,9 @@ def test_a_good_change_says_when_it_applies(client):
     cfl, = client.set(cfl=0.25)
     assert cfl.successful and "next step" in cfl.reason
     assert "dx" in _diagnostic(client, lambda s: "dx" in s["message"])["message"]
-    assert "dx = 0.05 m, 5896 particles" in _pause_and_reset(client)
+    assert f"dx = 0.05 m, {particles('dambreak1_thesis', 0.05)} particles" in _pause_and_reset(client)
     assert client.set(dx=0.06)[0].successful
-    assert "4385 particles" in _pause_and_reset(client)
+    assert f"{particles('dambreak1_thesis', 0.06)} particles" in _pause_and_reset(client)
 
 
 def test_a_paused_node_steps_one_output_and_the_cloud_is_the_scene(client):
@@ -256,7 +262,7 @@ def test_a_paused_node_steps_one_output_and_the_cloud_is_the_scene(client):
     assert [f.name for f in cloud.fields] == ["x", "y", "z", "vx", "vy", "vz", "density", "pressure"]
     model = build(load_scene("dambreak1_thesis"), dx=0.06)
     arrays = cloud_arrays(cloud)
-    assert cloud.width == len(model.particles) == 4385
+    assert cloud.width == len(model.particles)
     pos = np.stack([arrays["x"], arrays["y"], arrays["z"]], axis=1)
     np.testing.assert_allclose(pos, model.particles.pos, atol=1e-6)  # float32 of the same fill
     wrench = client.wait_for(WRENCH)[-1]
@@ -306,10 +312,10 @@ def test_reset_into_another_built_in_scene(client):
     result = client.set_together(scene="collapse_2d", dx=0.0025, end_time=0.3)
     assert result.successful, result.reason
     message = _pause_and_reset(client)
-    assert "collapse_2d" in message and "1829 particles" in message, message
+    assert "collapse_2d" in message and f"{particles('collapse_2d', 0.0025)} particles" in message, message
     client.clear(PARTICLES)
     assert client.call("step", Trigger).success
-    assert client.wait_for(PARTICLES)[-1].width == 1829
+    assert client.wait_for(PARTICLES)[-1].width == particles("collapse_2d", 0.0025)
 
     def topics():
         return {name for name, _ in client.node.get_publisher_names_and_types_by_node("sim_node", "/")}
@@ -320,7 +326,7 @@ def test_reset_into_another_built_in_scene(client):
     assert WRENCH not in topics() and "/sim_node/probes/toe" in topics()
     result = client.set_together(scene="dambreak1_thesis", dx=0.06, end_time=30.0)
     assert result.successful, result.reason
-    assert "4385 particles" in _pause_and_reset(client)
+    assert f"{particles('dambreak1_thesis', 0.06)} particles" in _pause_and_reset(client)
 
 
 def test_recording_toggles_and_reads_back_with_rosbags(client, tmp_path):
@@ -346,7 +352,7 @@ def test_recording_toggles_and_reads_back_with_rosbags(client, tmp_path):
                 clouds.append(reader.deserialize(raw, connection.msgtype))
     assert counts["/clock"] == counts[WRENCH] == counts[PARTICLES] == 3
     assert order[0] == "/clock"  # /clock before the outputs it stamps
-    assert clouds[-1].width == 4385
+    assert clouds[-1].width == particles("dambreak1_thesis", 0.06)
     assert bag_reader.read(bag).result["status"] == "stopped"
     assert client.set(record_dir="")[0].successful
 
@@ -430,7 +436,8 @@ def test_lifecycle_mode_without_autostart_and_sigterm_finishes_the_recording(tmp
         assert client.call("change_state", ChangeState,
                            transition=Transition(id=Transition.TRANSITION_CONFIGURE)).success
         assert client.call("get_state", GetState).current_state.id == State.PRIMARY_STATE_INACTIVE
-        assert _diagnostic(client, lambda s: s["state"] == "inactive")["particles"] == "1829"
+        inactive = _diagnostic(client, lambda s: s["state"] == "inactive")
+        assert inactive["particles"] == str(particles("collapse_2d", 0.0025))
         reply = client.call("set_paused", SetBool, data=False)
         assert not reply.success and "inactive" in reply.message
         assert client.call("change_state", ChangeState,
