@@ -32,6 +32,11 @@ def lattice(lo, hi, dx: float, dim: int) -> np.ndarray:
     return pts
 
 
+def cells(length: float, dx: float) -> int:
+    """The smallest whole number of cells no wider than dx that fill ``length`` (at least one)."""
+    return max(1, int(np.ceil(length / dx - 1e-9)))
+
+
 def fill_box(lo, hi, dx: float, dim: int):
     """Fluid filling the box [lo, hi] exactly: along each axis the spacing is the box length over
     the smallest whole number of cells no wider than dx, so the top layer lies half a spacing
@@ -39,7 +44,7 @@ def fill_box(lo, hi, dx: float, dim: int):
     velocity to a lattice that put it elsewhere). A box thinner than dx on the vertical (last)
     axis is one layer dx/2 above its bottom. Returns the points and the particle volume, box
     volume / count."""
-    counts = [max(1, int(np.ceil((hi[ax] - lo[ax]) / dx - 1e-9))) for ax in range(dim)]
+    counts = [cells(hi[ax] - lo[ax], dx) for ax in range(dim)]
     spacing = [(hi[ax] - lo[ax]) / counts[ax] for ax in range(dim)]
     axes = [lo[ax] + (np.arange(counts[ax]) + 0.5) * spacing[ax] for ax in range(dim)]
     up = dim - 1
@@ -57,16 +62,13 @@ def fill_box(lo, hi, dx: float, dim: int):
 
 def _wall_axis(length: float, dx: float, layers: int, walls: int):
     """Coordinates along one axis of a tank [0, length] and the spacing each stands for: inside,
-    fill_box's lattice (the whole number of cells no wider than dx); beyond each of the ``walls``
-    faces (0, 1: the floor, 2: both ends), ``layers`` layers dx apart from dx/2 out."""
-    n = max(1, int(np.ceil(length / dx - 1e-9)))
-    inner = (np.arange(n) + 0.5) * (length / n)
+    fill_box's lattice; beyond each of the ``walls`` faces (0, 1: the floor, 2: both ends),
+    ``layers`` layers dx apart from dx/2 out."""
+    n = cells(length, dx)
     out = (np.arange(layers) + 0.5) * dx
-    coords = [-out[::-1], inner] + ([length + out] if walls == 2 else [])
-    widths = [np.full(layers, dx), np.full(n, length / n)] + ([np.full(layers, dx)] if walls == 2 else [])
-    if walls == 0:
-        coords, widths = coords[1:], widths[1:]
-    return np.concatenate(coords), np.concatenate(widths)
+    coords = np.concatenate([-out[::-1]] * (walls > 0) + [(np.arange(n) + 0.5) * (length / n)]
+                            + [length + out] * (walls == 2))
+    return coords, np.where((coords > 0.0) & (coords < length), length / n, dx)
 
 
 def wall_particles(hi, dx: float, dim: int, layers: int, periodic=(False, False, False)):

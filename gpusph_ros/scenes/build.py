@@ -14,7 +14,7 @@ from ..sph.config import ConfigError, Plane, SolverConfig, check_device
 from ..sph.solver import Particles
 from ..sph.state import BOUNDARY, FLUID
 from . import reduce, resources
-from .boxes import boundary_layers, box_tank, fill_box
+from .boxes import boundary_layers, box_tank, cells, fill_box
 from .schema import Scene
 
 
@@ -46,7 +46,7 @@ def block_particles(lo, hi, dx: float, dim: int, layers: int, lid: bool):
     up = dim - 1
     shell = np.zeros(len(pts), dtype=bool)
     for ax in range(dim):
-        n = max(1, int(np.ceil((hi[ax] - lo[ax]) / dx - 1e-9)))
+        n = cells(hi[ax] - lo[ax], dx)
         k = np.floor((pts[:, ax] - lo[ax]) / (hi[ax] - lo[ax]) * n).astype(int)  # the cell index
         if ax != up:
             shell |= (k < layers) | (k >= n - layers)
