@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from gpusph_ros.scenes.boxes import boundary_layers, box_tank, fill_box
-from gpusph_ros.sph import SolverConfig
+from gpusph_ros.scenes.boxes import box_tank, fill_box
+from gpusph_ros.sph import SolverConfig, boundaries
 
 pytestmark = pytest.mark.unit
 
@@ -45,7 +45,7 @@ def test_every_wall_stands_dx_beyond_the_fluid_whatever_the_tank_width(dx):
     column = (0.4, 0.67, 0.3)
     cfg, parts = box_tank(cfg, tank, [((0.0, 0.0, 0.0), column)])
     fluid, wall = parts.pos[parts.ptype == 0], parts.pos[parts.ptype != 0]
-    layers = boundary_layers(cfg.boundary, cfg.hdx)
+    layers = boundaries.model(cfg.boundary).layers(cfg.hdx)
     mid = (fluid[:, 2] > 0.1) & (fluid[:, 2] < 0.2)
     for ax, side in [(0, 0), (1, 0), (1, 1), (2, 0)]:
         face = tank[ax] * side

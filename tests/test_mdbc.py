@@ -1,4 +1,4 @@
-"""The modified dynamic boundary condition (sph/mdbc.py; English et al. 2021).
+"""The modified dynamic boundary condition (sph/boundaries/mdbc.py; English et al. 2021).
 
 - Geometry: each boundary particle's ghost node is its mirror image across the nearest wall face
   (through the corner for a tank corner, across the nearest face of an obstacle, never through
@@ -27,7 +27,8 @@ from gpusph_ros.measure.sensors import WallPressure
 from gpusph_ros.scenes.boxes import box_tank
 from gpusph_ros.scenes.build import build
 from gpusph_ros.scenes.schema import parse_scene
-from gpusph_ros.sph import Solver, SolverConfig, mdbc
+from gpusph_ros.sph import Solver, SolverConfig
+from gpusph_ros.sph.boundaries import mdbc
 
 DX = 0.01
 U0, NU, T_STOKES, STOKES_LENGTH = 0.1, 1.0e-3, 0.05, 0.1  # Stokes' first problem: m/s, m^2/s, s, m
@@ -37,7 +38,7 @@ def ghosts(model):
     """Each boundary particle's position and ghost offset (host copies)."""
     solver = Solver(model.config, model.particles)
     b = solver.ptype.numpy() == 1
-    return solver.pos.numpy()[b].astype(np.float64), solver._ghost.numpy()[b].astype(np.float64), \
+    return solver.pos.numpy()[b].astype(np.float64), solver.ghost.numpy()[b].astype(np.float64), \
         solver.body.numpy()[b]
 
 

@@ -25,7 +25,7 @@ at each cell's centre as above, F = -sum p n dA and T = sum (x - c) x (-p n dA) 
 in 2D per unit depth. This is what a load cell behind a rigid face reads of the pressure, without
 the boundary particles' own noise that the net force on them carries (forces.py).
 
-Under mDBC (mdbc.py) the wall's own pressure is usable and no offset is needed: each face point
+Under mDBC (sph/boundaries/mdbc.py) the wall's own pressure is usable and no offset is needed: each face point
 reads the boundary's pressure, mDBC's first-order extrapolation of the fluid from the ghost node of
 the first boundary layer (dx/2 in front of the face) evaluated at the face (``WallPressure``).
 """
@@ -34,7 +34,7 @@ import math
 import numpy as np
 import warp as wp
 
-from ..sph import mdbc
+from ..sph import boundaries
 from .probes import PointProbes
 
 OFFSET_H = 1.5  # [h] the interpolation points' distance in front of the face
@@ -82,9 +82,9 @@ class WallPressure:
         self.points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
         self.normals = np.asarray(normals, dtype=np.float64).reshape(-1, 3)
         self._wall = (cfg.h, cfg.rho0, cfg.gravity)
-        if cfg.boundary == "mdbc":
+        self._kernel = boundaries.model(cfg.boundary).face_pressure(solver.scalar)
+        if self._kernel is not None:  # the wall's own pressure is usable
             dev, n = solver.device, len(self.points)
-            self._kernel = mdbc.build(solver.scalar).face_pressure
             self._pts = wp.array(self.points, dtype=solver.vec, device=dev)
             self._nrm = wp.array(self.normals, dtype=solver.vec, device=dev)
             self._pressure = wp.zeros(n, dtype=solver.scalar, device=dev)

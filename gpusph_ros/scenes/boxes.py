@@ -11,12 +11,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..sph.config import DENSITY_WALLS, Plane, SolverConfig
+from ..sph import boundaries
+from ..sph.config import Plane, SolverConfig
 from ..sph.eos import hydrostatic_density
 from ..sph.solver import Particles
 from ..sph.state import BOUNDARY, FLUID
 
-WALL_KINDS = ("particles", "planes")
+PLANES = boundaries.planes.MODEL.name
+WALL_KINDS = ("particles", PLANES)  # a wall of the scene: particles of the run's boundary model, or a plane
 
 
 def lattice(lo, hi, dx: float, dim: int) -> np.ndarray:
@@ -161,11 +163,6 @@ def beyond_faces(pts, hi, dim: int, faces) -> np.ndarray:
     return out
 
 
-def boundary_layers(boundary: str, hdx: float) -> int:
-    """Dynamic boundaries (and mDBC) need a full kernel support of particles; force-based ones one layer."""
-    return int(np.ceil(2.0 * hdx)) if boundary in DENSITY_WALLS else 1
-
-
 def box_tank(cfg: SolverConfig, tank, fluid_boxes, walls="particles", headroom: float = 0.5):
     """Particles and configuration for fluid boxes at rest in an open-top tank [0, tank].
 
@@ -183,7 +180,7 @@ def box_tank(cfg: SolverConfig, tank, fluid_boxes, walls="particles", headroom: 
     for face, kind in kinds.items():
         if kind not in WALL_KINDS:
             raise ValueError(f"walls.{face}: {kind!r} is not one of {', '.join(WALL_KINDS)}")
-    plane_faces = {face for face, kind in kinds.items() if kind == "planes"}
+    plane_faces = {face for face, kind in kinds.items() if kind == PLANES}
     fluid, rho, mass = [], [], []
     for lo, hi in fluid_boxes:
         pts, volume = fill_box(lo, hi, dx, dim)
@@ -195,12 +192,12 @@ def box_tank(cfg: SolverConfig, tank, fluid_boxes, walls="particles", headroom: 
     layers = 0
     wall, wall_volume = np.zeros((0, 3)), np.zeros(0)
     if len(plane_faces) < len(kinds):
-        layers = boundary_layers(cfg.boundary, cfg.hdx)
-        if cfg.boundary in DENSITY_WALLS:
+        model = boundaries.model(cfg.boundary)
+        layers = model.layers(cfg.hdx)
+        if model.volume:  # the fluid's lattice continued through the wall
             wall, wall_volume = wall_particles(tank, dx, dim, layers, periodic)
         else:
-            spacing = dx / cfg.mk_beta if cfg.boundary == "monaghan_kajtar" else dx
-            wall = wall_shell(tank, dx, dim, spacing, periodic)
+            wall = wall_shell(tank, dx, dim, model.spacing(dx, cfg.mk_beta), periodic)
             wall_volume = np.full(len(wall), dx ** dim)
         # a particle wall stops where a plane takes over
         kept = ~beyond_faces(wall, tank, dim, plane_faces)

@@ -10,11 +10,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..sph import boundaries
 from ..sph.config import ConfigError, Plane, SolverConfig, check_device
 from ..sph.solver import Particles
 from ..sph.state import BOUNDARY, FLUID
 from . import reduce, resources
-from .boxes import boundary_layers, box_tank, cells, fill_box
+from .boxes import box_tank, cells, fill_box
 from .schema import Scene
 
 
@@ -118,7 +119,7 @@ def build(scene: Scene, **numerics) -> Model:
         raise ConfigError("fluid", [b.name for b in scene.fluid], "boxes that hold fluid outside the obstacles")
     pos, rho, mass = [parts.pos[keep]], [parts.rho[keep]], [parts.mass[keep]]
     ptype, body = [parts.ptype[keep]], [parts.body[keep]]
-    layers = boundary_layers(cfg.boundary, cfg.hdx)
+    layers = boundaries.model(cfg.boundary).layers(cfg.hdx)
     bodies = {}
     for k, o in enumerate(scene.obstacles):
         # a wall's thickness in from each side face and from the top of a block lower than the tank

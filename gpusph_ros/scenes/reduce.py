@@ -29,7 +29,9 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
-from ..sph.config import LIST_SKIN, ConfigError
+from ..sph.config import ConfigError
+from ..sph.neighbours import shortest_period
+from .boxes import PLANES
 from .schema import Scene
 
 MODELS = ("full", "slab", "2d", "2d_until_reflection")
@@ -59,9 +61,8 @@ class Reduction:
 
 
 def min_slab_cells(hdx: float) -> int:
-    """Spacings across the narrowest periodic slab: the cell search wraps one cell each way, so a
-    period holds three cells of LIST_SKIN x 2h (sph.config)."""
-    return int(math.ceil(3 * LIST_SKIN * 2.0 * hdx - 1e-9))
+    """Spacings across the narrowest periodic slab (neighbours.shortest_period, h in dx)."""
+    return int(math.ceil(shortest_period(hdx) - 1e-9))
 
 
 def uniform_across_y(scene: Scene, obstacles: bool = True) -> str:
@@ -238,7 +239,7 @@ def apply(scene: Scene, reduction: Reduction, end_time: float, dx: float, hdx: f
     if reduction.crop:
         scene = _crop(scene, end_time, dx)
     if reduction.wall_planes:
-        scene = dataclasses.replace(scene, walls={face: "planes" for face in scene.walls})
+        scene = dataclasses.replace(scene, walls={face: PLANES for face in scene.walls})
     return scene
 
 

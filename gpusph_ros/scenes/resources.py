@@ -11,33 +11,31 @@ of integers. Building the particles on the host takes about HOST_BYTES a particl
 import math
 from pathlib import Path
 
+from ..sph import boundaries
 from ..sph.config import ConfigError, SolverConfig
 from ..sph.solver import default_max_neighbours
-from .boxes import boundary_layers
+from .boxes import cells
 
 HOST_BYTES = 200  # numpy arrays of the particle set and the lattice fills, per particle
 _SCALARS, _INTEGER_BYTES = 60, 68
 USABLE = 0.9  # of the free memory a run may plan to take
 
 
-def _cells(length: float, spacing: float) -> int:
-    return max(1, math.ceil(length / spacing - 1e-9))
-
-
 def particle_bound(scene, cfg: SolverConfig, fluid_boxes) -> int:
     """At least as many particles as ``scenes.build`` makes of ``scene`` at ``cfg.dx``:
-    ``fluid_boxes`` filled, particle walls (``boundary_layers`` layers of the wall spacing) and
+    ``fluid_boxes`` filled, particle walls (the boundary model's layers of its spacing) and
     the obstacles' blocks."""
     dim, dx = scene.dim, cfg.dx
-    n = sum(math.prod(_cells(hi[ax] - lo[ax], dx) for ax in range(dim)) for lo, hi in fluid_boxes)
-    n += sum(math.prod(_cells(o.hi[ax] - o.lo[ax], dx) for ax in range(dim)) for o in scene.obstacles)
+    n = sum(math.prod(cells(hi[ax] - lo[ax], dx) for ax in range(dim)) for lo, hi in fluid_boxes)
+    n += sum(math.prod(cells(o.hi[ax] - o.lo[ax], dx) for ax in range(dim)) for o in scene.obstacles)
     faces = [face for face, kind in scene.walls.items() if kind == "particles"]
     if faces:
-        spacing = dx / cfg.mk_beta if cfg.boundary == "monaghan_kajtar" else dx
-        layers = boundary_layers(cfg.boundary, cfg.hdx) + 1  # the shell sits half a spacing out
+        model = boundaries.model(cfg.boundary)
+        spacing = model.spacing(dx, cfg.mk_beta)
+        layers = model.layers(cfg.hdx) + 1  # the shell sits half a spacing out
         up = dim - 1
-        outer = [_cells(scene.tank[ax], spacing) + (0 if scene.periodic[ax] else 2 * layers) for ax in range(up)]
-        outer.append(_cells(scene.tank[up], spacing) + layers)
+        outer = [cells(scene.tank[ax], spacing) + (0 if scene.periodic[ax] else 2 * layers) for ax in range(up)]
+        outer.append(cells(scene.tank[up], spacing) + layers)
         for face in faces:  # each face's slab of wall particles, edges counted twice
             ax = up if face == "floor" else "xy".index(face[0])
             if not scene.periodic[ax]:

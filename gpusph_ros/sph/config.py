@@ -8,22 +8,18 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import os
 from dataclasses import dataclass, field
 
-KERNELS = ("quadratic", "cubic_spline", "wendland")
-VISCOSITIES = ("artificial", "laminar", "sps")
-BOUNDARIES = ("lennard_jones", "monaghan_kajtar", "dynamic", "mdbc")
-MDBC_SLIPS = ("none", "no_slip", "free_slip")
-# boundary models whose wall particles carry a density (a kernel support of layers, lists of their own);
-# boundaries.BOUNDARY_ID numbers them from "dynamic" up
-DENSITY_WALLS = ("dynamic", "mdbc")
-DENSITY_DIFFUSIONS = ("none", "delta")
-PRECISIONS = ("float32", "float64")
+from . import boundaries, density, kernels, neighbours, viscosity
+from .device import default_device
 
-# neighbour lists reach LIST_SKIN kernel supports; a list stays valid until some particle has moved
-# half the difference since it was built (a Verlet list)
-LIST_SKIN = 1.1
+# the names of each family's models, owned by its module
+KERNELS = kernels.NAMES
+VISCOSITIES = viscosity.NAMES
+BOUNDARIES = boundaries.NAMES
+MDBC_SLIPS = boundaries.mdbc.SLIPS
+DENSITY_DIFFUSIONS = density.DIFFUSIONS
+PRECISIONS = ("float32", "float64")
 
 # guards against runs that could never finish or never fit (README, "Limits and failure behaviour")
 MIN_CFL = 0.01  # a smaller Courant number takes > 100x the steps of the default for no accuracy
@@ -36,11 +32,6 @@ def shown(value) -> str:
     """A refused value as an error quotes it: its repr, cut to a line (never a file's contents)."""
     text = repr(value)
     return text if len(text) <= _SHOWN else text[:_SHOWN - 25] + f"... ({len(text)} characters)"
-
-
-def default_device() -> str:
-    """The Warp device a run uses unless it names one: $GPUSPH_ROS_DEVICE (cuda:0, say), else cpu."""
-    return os.environ.get("GPUSPH_ROS_DEVICE", "cpu")
 
 
 class ConfigError(ValueError):
@@ -239,12 +230,12 @@ class SolverConfig:
         if not 0.0 < self.rho_min_ratio < 1.0 < self.rho_max_ratio:
             raise ConfigError("rho_min_ratio/rho_max_ratio", (self.rho_min_ratio, self.rho_max_ratio),
                               "0 < rho_min_ratio < 1 < rho_max_ratio")
+        shortest = neighbours.shortest_period(self.h)
         for axis, periodic in enumerate(self.periodic):
-            # the cell search wraps one cell each way: a period must hold three whole cells
-            if periodic and (self.domain_hi[axis] - self.domain_lo[axis]) < 3 * LIST_SKIN * 2 * self.h:
+            if periodic and (self.domain_hi[axis] - self.domain_lo[axis]) < shortest:
                 raise ConfigError("periodic", self.periodic,
-                                  f"periodic axes at least {3 * LIST_SKIN:.2f} kernel supports "
-                                  f"({3 * LIST_SKIN * 2 * self.h:.4g} m) long; axis {axis} is shorter")
+                                  f"periodic axes at least {shortest / (2 * self.h):.2f} kernel supports "
+                                  f"({shortest:.4g} m) long; axis {axis} is shorter")
         for k, plane in enumerate(self.planes):
             normal = getattr(plane, "normal", None)
             try:

@@ -18,7 +18,8 @@ import warp as wp
 
 from . import kernels, neighbours, state
 
-DENSITY_DIFFUSION_ID = {"none": 0, "delta": 1}
+DIFFUSIONS = ("none", "delta")  # the run setting ``density_diffusion``
+DENSITY_DIFFUSION_ID = {name: k for k, name in enumerate(DIFFUSIONS)}
 FLUID = state.FLUID
 BOUNDARY = state.BOUNDARY
 

@@ -20,10 +20,11 @@ from types import SimpleNamespace
 import numpy as np
 import warp as wp
 
-from .config import KERNELS, default_device
+from .device import default_device
 
-KERNEL_ID = {name: k for k, name in enumerate(KERNELS)}
-WENDLAND = KERNEL_ID["wendland"]
+NAMES = ("quadratic", "cubic_spline", "wendland")  # the run setting ``kernel``
+KERNEL_ID = {name: k for k, name in enumerate(NAMES)}
+QUADRATIC, CUBIC_SPLINE, WENDLAND = (KERNEL_ID[name] for name in ("quadratic", "cubic_spline", "wendland"))
 
 _NORM = {
     ("quadratic", 2): 2.0 / math.pi,
@@ -49,9 +50,9 @@ def build(scalar):
         """W / a_D as a function of q; zero outside the support."""
         if q >= scalar(2.0):
             return scalar(0.0)
-        if kernel == 0:
+        if kernel == QUADRATIC:
             return scalar(0.1875) * q * q - scalar(0.75) * q + scalar(0.75)
-        if kernel == 1:
+        if kernel == CUBIC_SPLINE:
             if q < scalar(1.0):
                 return scalar(1.0) - scalar(1.5) * q * q + scalar(0.75) * q * q * q
             t = scalar(2.0) - q
@@ -64,9 +65,9 @@ def build(scalar):
         """d(W / a_D) / dq; zero outside the support."""
         if q >= scalar(2.0):
             return scalar(0.0)
-        if kernel == 0:
+        if kernel == QUADRATIC:
             return scalar(0.375) * q - scalar(0.75)
-        if kernel == 1:
+        if kernel == CUBIC_SPLINE:
             if q < scalar(1.0):
                 return scalar(-3.0) * q + scalar(2.25) * q * q
             t = scalar(2.0) - q
@@ -83,7 +84,7 @@ def build(scalar):
     def grad_factor(kernel: int, norm: scalar, inv_h: scalar, r: scalar) -> scalar:
         """F(r) = (dW/dr) / r, so that grad_a W_ab = r_ab F(r_ab). Finite as r -> 0."""
         q = r * inv_h
-        if kernel == 0:
+        if kernel == QUADRATIC:
             # the quadratic kernel's slope does not vanish at q = 0; guard the division
             return norm * inv_h * shape_dq(kernel, q) / wp.max(r, scalar(1.0e-3) / inv_h)
         if q < scalar(1.0e-6):
@@ -102,7 +103,7 @@ def build(scalar):
 
 def evaluate(kernel: str, dim: int, h: float, r, precision: str = "float64", device: str = None):
     """W(r) and dW/dr at the distances ``r`` (host arrays), computed by the device functions (on
-    ``device``, default config.default_device())."""
+    ``device``, default device.default_device())."""
     device = device or default_device()
     scalar = wp.float64 if precision == "float64" else wp.float32
     kern = build(scalar).evaluate

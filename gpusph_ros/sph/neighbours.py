@@ -17,8 +17,17 @@ from types import SimpleNamespace
 import numpy as np
 import warp as wp
 
-from .config import LIST_SKIN
 from .state import BOUNDARY, FLUID
+
+# lists reach LIST_SKIN kernel supports; a list stays valid until some particle has moved half the
+# difference since it was built (a Verlet list)
+LIST_SKIN = 1.1
+
+
+def shortest_period(h: float) -> float:
+    """The shortest periodic axis for smoothing length h: the cell search wraps one cell (a list
+    radius, LIST_SKIN x 2h) each way, so a period must hold three whole cells."""
+    return 3 * LIST_SKIN * 2.0 * h
 
 
 class NeighbourOverflow(RuntimeError):

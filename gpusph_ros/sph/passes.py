@@ -1,9 +1,10 @@
 """The passes of one solver step, one Warp kernel each, compiled once per floating-point type.
 
 Models are chosen at run time through integer ids held in ``Params`` (see kernels.KERNEL_ID,
-viscosity.VISCOSITY_ID, boundaries.BOUNDARY_ID, density.DENSITY_DIFFUSION_ID); each equation
-lives in the module of its family (kernels, eos, momentum, viscosity, density, xsph, boundaries)
-and is only combined here. The run-safety checks are health.py's.
+viscosity.VISCOSITY_ID, density.DENSITY_DIFFUSION_ID; a wall treatment through the functions of
+``boundaries``, which alone read its id); each equation lives in the module of its family (kernels,
+eos, momentum, viscosity, density, xsph, shifting, boundaries/) and is only combined here. The
+run-safety checks are health.py's.
 
 Step (predictor-corrector as GPUSPH, Herault et al. 2010):
   neighbours(x_n) -> eos -> [sps] -> interact(n) -> choose_dt
@@ -25,8 +26,6 @@ from . import boundaries, density, eos, health, kernels, momentum, neighbours, s
 FLUID = state.FLUID
 BOUNDARY = state.BOUNDARY
 EXCLUDED = state.EXCLUDED
-DYNAMIC = boundaries.BOUNDARY_ID["dynamic"]  # and mdbc above it: particle walls with a density
-LENNARD_JONES = boundaries.LENNARD_JONES
 ARTIFICIAL = viscosity.VISCOSITY_ID["artificial"]
 SPS = viscosity.VISCOSITY_ID["sps"]
 
@@ -51,9 +50,8 @@ def _force_passes(scalar):
     Sh = shifting.build(scalar)
     concentration_terms, shift_velocity = Sh.concentration_terms, Sh.shift_velocity
     B = boundaries.build(scalar)
-    lennard_jones, monaghan_kajtar = B.lennard_jones, B.monaghan_kajtar
+    repulsion, repulsion_potential, wall_density_rate = B.repulsion, B.repulsion_potential, B.wall_density_rate
     plane_wall, plane_corners = B.plane_wall, B.plane_corners
-    lj_potential, mk_potential = B.lennard_jones_potential, B.monaghan_kajtar_potential
     N = neighbours.grid(scalar)
     Grid, separation = N.Grid, N.separation
 
@@ -70,11 +68,8 @@ def _force_passes(scalar):
         if r >= scalar(2.0) * p.h:
             return zero, scalar(0.0), zero, scalar(0.0), zero
         t_b = f.ptype[b]
-        if t_b == BOUNDARY and p.boundary < DYNAMIC:  # walls without fluid volume
-            if p.boundary == LENNARD_JONES:
-                return lennard_jones(p.lj_d, p.lj_r0, r_ab, r), scalar(0.0), zero, scalar(0.0), zero
-            return (monaghan_kajtar(p.mk_k, p.mk_beta, p.mk_d, p.inv_h, f.mass[a], f.mass[b], r_ab, r), scalar(0.0),
-                    zero, scalar(0.0), zero)
+        if t_b == BOUNDARY and p.wall_volume == 0:  # walls without fluid volume push
+            return repulsion(p, f.mass[a], f.mass[b], r_ab, r), scalar(0.0), zero, scalar(0.0), zero
         m_b = f.mass[b]
         rho_a = f.rho[a]
         rho_b = f.rho[b]
@@ -129,7 +124,7 @@ def _force_passes(scalar):
         base = i * grid.max_neighbours
         for k in range(count[i]):
             j = nbr[base + k]
-            if f.ptype[j] == FLUID or p.boundary >= DYNAMIC:
+            if f.ptype[j] == FLUID or p.wall_volume != 0:
                 r_ab = separation(grid, f.pos[i], f.pos[j])
                 r = wp.length(r_ab)
                 if r < scalar(2.0) * p.h:
@@ -186,18 +181,18 @@ def _force_passes(scalar):
                                        p_i, rho_i)
             track_max(maxima, 2 * chunk, wp.length(a))
             track_max(maxima, 2 * chunk + 1, mu_max)
-        elif p.boundary == DYNAMIC or f.body[i] >= 0:
-            # a boundary particle: density (dynamic boundaries; mDBC sets it in mdbc.py) and, on a
-            # body, the reaction of every fluid neighbour, so that mass x acc sums to the force on it
+        elif p.wall_continuity != 0 or f.body[i] >= 0:
+            # a boundary particle: its density where it follows the continuity equation (dynamic
+            # boundaries; mDBC sets it before the step) and, on a body, the reaction of every fluid
+            # neighbour, so that mass x acc sums to the force on it
             ui = f.vel[i]
             for k in range(count[i]):
                 j = nbr[base + k]
                 if f.ptype[j] == FLUID:
                     r_ji = separation(grid, f.pos[j], xi)
                     r = wp.length(r_ji)
-                    if p.boundary == DYNAMIC and r < scalar(2.0) * p.h:
-                        grad = -r_ji * grad_factor(p.kernel, p.norm, p.inv_h, r)
-                        dr += continuity(f.mass[j], ui - f.vel[j], grad)
+                    if p.wall_continuity != 0 and r < scalar(2.0) * p.h:
+                        dr += wall_density_rate(p.kernel, p.norm, p.inv_h, f.mass[j], ui, f.vel[j], r_ji, r)
                     if f.body[i] >= 0:
                         da, ddr, dxs, mu, grad = pair(p, f, j, i, r_ji)
                         a -= f.mass[j] / f.mass[i] * da
@@ -223,11 +218,7 @@ def _force_passes(scalar):
         for k in range(count[i]):
             j = nbr[base + k]
             if ptype[j] == BOUNDARY:
-                r = wp.length(separation(grid, pos[i], pos[j]))
-                if p.boundary == LENNARD_JONES:
-                    e += lj_potential(p.lj_d, p.lj_r0, r)
-                else:
-                    e += mk_potential(p.mk_k, p.mk_beta, p.mk_d, p.inv_h, mass[i], mass[j], r)
+                e += repulsion_potential(p, mass[i], mass[j], wp.length(separation(grid, pos[i], pos[j])))
         if e > scalar(0.0):
             wp.atomic_add(total, 0, wp.float64(mass[i] * e))
 
@@ -239,7 +230,7 @@ def _force_passes(scalar):
         if f.ptype[i] != FLUID:
             rho_out[i] = f.rho[i]
             return
-        rho_out[i] = shepard_density(p.kernel, p.norm, p.inv_h, p.boundary >= DYNAMIC, grid, nbr, count, i, f.pos,
+        rho_out[i] = shepard_density(p.kernel, p.norm, p.inv_h, p.wall_volume != 0, grid, nbr, count, i, f.pos,
                                      f.rho, f.mass, f.ptype)
 
     return SimpleNamespace(equation_of_state=equation_of_state, sps_strain=sps_strain, interact=interact,

@@ -12,8 +12,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import warp as wp
 
-from . import boundaries, density, health, kernels, mdbc, passes, viscosity
-from .config import DENSITY_WALLS, SolverConfig, check_device
+from . import boundaries, density, health, kernels, passes, viscosity
+from .config import SolverConfig, check_device
 from .health import HealthError
 from .launch import Launcher
 from .neighbours import NeighbourList, NeighbourOverflow
@@ -80,14 +80,14 @@ class Solver:
         if self.n == 0:
             raise ValueError("particles: the particle set is empty")
         self._passes = passes.build(self.scalar)
-        self._mdbc = mdbc.build(self.scalar) if self.config.boundary == "mdbc" else None
+        self.boundary = boundaries.model(cfg.boundary)
         self._fluid_mass = float(particles.mass[particles.ptype == FLUID].sum())
         self.n_fluid = int((particles.ptype == FLUID).sum())
         self.params = self._make_params()
         self.launch = Launcher(self.device, cfg.cpu_threads)
         self._allocate(particles)
         self.neighbours = NeighbourList(self.scalar, cfg.dim, 2.0 * cfg.h, cfg.domain_lo, cfg.domain_hi,
-                                        cfg.periodic, self.ptype, self._needs_list, self._ghost,
+                                        cfg.periodic, self.ptype, self._needs_list, self.ghost,
                                         max_neighbours or default_max_neighbours(cfg.dim, cfg.hdx),
                                         self.launch)
         self._launched = 0
@@ -112,9 +112,8 @@ class Solver:
         p.nu = cfg.nu
         p.cs_dl2 = (cfg.sps_cs * cfg.dx) ** 2
         p.ci_dl2 = cfg.sps_ci * cfg.dx ** 2
-        p.boundary = boundaries.BOUNDARY_ID[cfg.boundary]
-        p.mdbc_slip = mdbc.SLIP_ID[cfg.mdbc_slip]
-        for name, value in boundaries.wall_constants(g, cfg.depth, cfg.dx, cfg.mk_beta, cfg.dim).items():
+        p.mdbc_slip = boundaries.mdbc.SLIP_ID[cfg.mdbc_slip]
+        for name, value in boundaries.params(cfg.boundary, g, cfg.depth, cfg.dx, cfg.mk_beta, cfg.dim).items():
             setattr(p, name, value)
         p.delta_hc0 = (cfg.delta * cfg.h * cfg.sound_speed
                        if density.DENSITY_DIFFUSION_ID[cfg.density_diffusion] else 0.0)
@@ -167,13 +166,13 @@ class Solver:
         self.body = arr(particles.body, wp.int32)
         # the arrays are kept in cell order; ids maps each slot back to the caller's particle
         self.ids = arr(np.arange(n, dtype=np.int32), wp.int32)
-        # boundary particles need their own list only for their density (dynamic: by continuity;
-        # mDBC: the list holds the fluid near the ghost node too) or to sum a body force
-        needs = (particles.ptype == FLUID) | (particles.body >= 0) | (cfg.boundary in DENSITY_WALLS)
+        # boundary particles need their own list only for their density (walls with a volume: dynamic
+        # by continuity; mDBC's list holds the fluid near the ghost node too) or to sum a body force
+        needs = (particles.ptype == FLUID) | (particles.body >= 0) | self.boundary.volume
         self._needs_list = arr(needs.astype(np.int32), wp.int32)
-        self._ghost = wp.zeros(n, dtype=v, device=dev)  # mDBC's ghost-node offsets (mdbc.py); else zero
+        self.ghost = wp.zeros(n, dtype=v, device=dev)  # mDBC's ghost-node offsets (boundaries/mdbc.py); else zero
         self._sorted = [wp.empty_like(a) for a in (self.pos, self.vel, self.rho, self.mass, self.ptype, self.body,
-                                                   self.ids, self._needs_list, self._ghost)]
+                                                   self.ids, self._needs_list, self.ghost)]
         self.pressure = wp.zeros(n, dtype=s, device=dev)
         # half-step and candidate states, rates of change
         self._pos_h, self._vel_h, self._rho_h = (wp.zeros_like(a) for a in (self.pos, self.vel, self.rho))
@@ -184,7 +183,7 @@ class Solver:
         shared = dict(pressure=self.pressure, p_rho2=wp.zeros(n, dtype=s, device=dev), mass=self.mass,
                       ptype=self.ptype, body=self.body, tau_diag=wp.zeros(n, dtype=v, device=dev),
                       tau_off=wp.zeros(n, dtype=v, device=dev))
-        self._fields = self._make_fields(self.pos, self.vel, self.rho, shared)
+        self.fields = self._make_fields(self.pos, self.vel, self.rho, shared)
         self._fields_h = self._make_fields(self._pos_h, self._vel_h, self._rho_h, shared)
         planes = cfg.planes or []
         pts = [p.point for p in planes] or [(0.0, 0.0, 0.0)]
@@ -192,11 +191,8 @@ class Solver:
         self._plane_pt, self._plane_n = arr(np.asarray(pts, dtype=np.float64), v), arr(np.asarray(nrm), v)
         self._maxima = wp.zeros(2 * self.launch.threads, dtype=s, device=dev)  # |a|max, |mu|max per chunk
         solids = cfg.solids or [((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))]
-        self._solid_lo = arr(np.asarray([lo for lo, _ in solids], dtype=np.float64), v)
-        self._solid_hi = arr(np.asarray([hi for _, hi in solids], dtype=np.float64), v)
-        if self._mdbc is not None:
-            wp.launch(self._mdbc.ghost_offsets, dim=n, inputs=[self.params, self.pos, self.ptype, self.body,
-                                                               self._solid_lo, self._solid_hi, self._ghost], device=dev)
+        self.solid_lo = arr(np.asarray([lo for lo, _ in solids], dtype=np.float64), v)
+        self.solid_hi = arr(np.asarray([hi for _, hi in solids], dtype=np.float64), v)
         self._fail = arr(np.full(health.N_CHECKS, health.NO_FAILURE, dtype=np.int32), wp.int32)
         # the census sums (health.CENSUS_START); clumped fluid particles and the first of them
         self._energy_sum = arr(np.array(health.CENSUS_START), wp.float64)
@@ -211,7 +207,8 @@ class Solver:
         self._excluded_mass = arr(np.array([0.0, -1.0]), wp.float64)
         self._clock = wp.zeros(4, dtype=wp.float64, device=dev)  # t, dt, stable dt, time of a failed step
         self._steps = arr(np.array([0, -1], dtype=np.int32), wp.int32)  # steps, failed step
-        wp.launch(self._passes.equation_of_state, dim=n, inputs=[self.params, self._fields], device=dev)
+        wp.launch(self._passes.equation_of_state, dim=n, inputs=[self.params, self.fields], device=dev)
+        self.boundary.prepare(self)
 
     def _make_fields(self, pos, vel, rho, shared: dict):
         f = self._passes.Fields()
@@ -231,7 +228,7 @@ class Solver:
 
     def _reorder(self):
         state = [self.pos, self.vel, self.rho, self.mass, self.ptype, self.body, self.ids, self._needs_list,
-                 self._ghost]
+                 self.ghost]
         order = self.neighbours.sort(self.pos)
         wp.launch(self._passes.permute, dim=self.n, inputs=[order, *state, *self._sorted], device=self.device)
         for dst, src in zip(state, self._sorted):
@@ -244,12 +241,8 @@ class Solver:
             self._reorder()
         self.neighbours.rebuild(self.pos)
         self._maxima.zero_()
-        if self._mdbc is not None:
-            # once a step, before the first force pass, as DualSPHysics (MdbcCorrector off): the
-            # half step's boundary particles inherit it through the integrator
-            nl = self.neighbours
-            self.launch(self._mdbc.boundary_state, n, [p, nl.grid, nl.nbr, nl.count, self._fields, self._ghost])
-        self._forces(self._fields)
+        self.boundary.before_forces(self)
+        self._forces(self.fields)
         wp.launch(k.choose_dt, dim=1, inputs=[p, t_target, self._maxima, self._fail, self._clock], device=dev)
         wp.launch(k.integrate, dim=n,
                   inputs=[p, self._clock, 0.5, self.pos, self.vel, self.rho, self.ptype, self.vel, self.acc,
@@ -260,14 +253,14 @@ class Solver:
                           self._drho, self._xsph, self._shift, self._pos_c, self._vel_c, self._rho_c], device=dev)
         wp.launch(k.check_particles, dim=n,
                   inputs=[p, self.pos, self._pos_c, self._vel_c, self._rho_c, self.mass, self.ptype, self.ids,
-                          self._solid_lo, self._solid_hi, self._fail, self._faulty, self._pending,
+                          self.solid_lo, self.solid_hi, self._fail, self._faulty, self._pending,
                           self._pending_mass], device=dev)
         if self._launched % _CENSUS_EVERY == 0:
             self._energy_sum[0:1].zero_()
             wp.launch(k.census, dim=n, inputs=[p, self._pos_c, self._vel_c, self._rho_c, self.mass, self.ptype,
-                                               self.ids, self._clumped, self._faulty, self._solid_lo,
-                                               self._solid_hi, self._energy_sum, self._clump_count], device=dev)
-            if p.boundary < passes.DYNAMIC and self.n > self.n_fluid:
+                                               self.ids, self._clumped, self._faulty, self.solid_lo,
+                                               self.solid_hi, self._energy_sum, self._clump_count], device=dev)
+            if self.boundary.repulsive and self.n > self.n_fluid:
                 nl = self.neighbours
                 self.launch(k.wall_energy, n, [p, nl.grid, nl.nbr, nl.count, self._pos_c, self.mass, self.ptype,
                                                self._energy_sum])
@@ -290,7 +283,7 @@ class Solver:
         nl = self.neighbours
         if rebuild:
             nl.rebuild(self.pos, force=True)
-        self.launch(self._passes.shepard, self.n, [self.params, nl.grid, nl.nbr, nl.count, self._fields, self._rho_c])
+        self.launch(self._passes.shepard, self.n, [self.params, nl.grid, nl.nbr, nl.count, self.fields, self._rho_c])
         wp.copy(self.rho, self._rho_c)
 
     def _sync(self):
@@ -435,7 +428,7 @@ class Solver:
     def update_pressure(self):
         """Bring the pressure array up to the current density (the step loop keeps it only where
         the force passes need it)."""
-        wp.launch(self._passes.equation_of_state, dim=self.n, inputs=[self.params, self._fields], device=self.device)
+        wp.launch(self._passes.equation_of_state, dim=self.n, inputs=[self.params, self.fields], device=self.device)
 
     def snapshot(self) -> dict:
         """Host copies of the state in the caller's particle order: pos, vel (n x 3), rho, pressure,
@@ -449,8 +442,8 @@ class Solver:
         snap["body"] = self.body.numpy()[slot_of]
         if self.config.viscosity == "sps":
             # SPS stress / rho of the last force pass: (xx, yy, zz) and (xy, xz, yz)
-            snap["sps_tau_diag"] = self._fields.tau_diag.numpy().astype(np.float64)[slot_of]
-            snap["sps_tau_off"] = self._fields.tau_off.numpy().astype(np.float64)[slot_of]
+            snap["sps_tau_diag"] = self.fields.tau_diag.numpy().astype(np.float64)[slot_of]
+            snap["sps_tau_off"] = self.fields.tau_off.numpy().astype(np.float64)[slot_of]
         return snap
 
     def measurement_view(self):
@@ -458,7 +451,7 @@ class Solver:
         state, for measurements that run on the device between steps."""
         self.update_pressure()
         self.neighbours.rebuild(self.pos)
-        return self.params, self._fields, self.neighbours
+        return self.params, self.fields, self.neighbours
 
     def device_bytes(self) -> int:
         """Bytes of every array this solver holds on its device: state, half-step and candidate

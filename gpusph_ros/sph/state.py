@@ -29,8 +29,10 @@ def build(scalar):
         nu: scalar
         cs_dl2: scalar
         ci_dl2: scalar
-        boundary: int
-        mdbc_slip: int  # mdbc.SLIP_ID
+        boundary: int  # boundaries.BOUNDARY_ID: only boundaries/ reads it
+        wall_volume: int  # 1: the wall particles carry a density and a fluid volume (boundaries.model)
+        wall_continuity: int  # 1: the wall particles' density follows the continuity equation
+        mdbc_slip: int  # boundaries.mdbc.SLIP_ID
         lj_d: scalar
         lj_r0: scalar
         mk_k: scalar

@@ -14,7 +14,8 @@ from types import SimpleNamespace
 
 import warp as wp
 
-VISCOSITY_ID = {"artificial": 0, "laminar": 1, "sps": 2}
+NAMES = ("artificial", "laminar", "sps")  # the run setting ``viscosity``
+VISCOSITY_ID = {name: k for k, name in enumerate(NAMES)}
 
 
 @functools.lru_cache(maxsize=None)

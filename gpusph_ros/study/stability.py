@@ -26,9 +26,11 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
-KERNELS = ("quadratic", "cubic_spline", "wendland")
-VISCOSITIES = ("artificial", "laminar", "sps")
-BOUNDARIES = ("lennard_jones", "monaghan_kajtar", "planes", "dynamic", "mdbc")
+from ..sph import boundaries, kernels, viscosity
+
+KERNELS = kernels.NAMES
+VISCOSITIES = viscosity.NAMES
+BOUNDARIES = boundaries.STUDIED
 DENSITIES = ("none", "shepard", "delta")
 SWITCHES = ("off", "on")
 SWITCHED = ("shifting", "xsph")  # the dimensions that are off or on
@@ -54,11 +56,7 @@ class Combination:
                "density_diffusion": "delta" if self.density == "delta" else "none",
                "shepard_every": 40 if self.density == "shepard" else 0,
                "shifting": self.shifting == "on", "xsph": self.xsph == "on"}
-        if self.boundary == "planes":
-            out["wall_planes"] = True
-        else:
-            out["boundary"] = self.boundary
-        return out
+        return {**out, **boundaries.model(self.boundary).run_settings()}
 
 
 def combinations(kernels=KERNELS, viscosities=VISCOSITIES, boundaries=BOUNDARIES, densities=DENSITIES,

@@ -34,13 +34,40 @@ from types import SimpleNamespace
 
 import warp as wp
 
-from . import eos, kernels, neighbours, state
+from .. import eos, kernels, neighbours, state
+from .model import BoundaryModel
 
 FLUID = state.FLUID
 BOUNDARY = state.BOUNDARY
-SLIP_ID = {"none": 0, "no_slip": 1, "free_slip": 2}
+SLIPS = ("none", "no_slip", "free_slip")  # the run setting mdbc_slip
+SLIP_ID = {name: k for k, name in enumerate(SLIPS)}
 NO_SLIP, FREE_SLIP = SLIP_ID["no_slip"], SLIP_ID["free_slip"]
 DETERMINANT_LIMIT = 1.0e-3  # DualSPHysics' determlimit for the first-order correction
+
+
+class Mdbc(BoundaryModel):
+    name = "mdbc"
+    volume = True
+
+    def prepare(self, solver):
+        """The ghost-node offsets, once: the walls do not move."""
+        passes = build(solver.scalar)
+        wp.launch(passes.ghost_offsets, dim=solver.n, inputs=[solver.params, solver.pos, solver.ptype, solver.body,
+                                                              solver.solid_lo, solver.solid_hi, solver.ghost],
+                  device=solver.device)
+
+    def before_forces(self, solver):
+        """Once a step, before the first force pass, as DualSPHysics (MdbcCorrector off): the half
+        step's boundary particles inherit it through the integrator."""
+        nl = solver.neighbours
+        solver.launch(build(solver.scalar).boundary_state, solver.n,
+                      [solver.params, nl.grid, nl.nbr, nl.count, solver.fields, solver.ghost])
+
+    def face_pressure(self, scalar):
+        return build(scalar).face_pressure
+
+
+MODEL = Mdbc()
 
 
 @functools.lru_cache(maxsize=None)

@@ -1,0 +1,46 @@
+"""What a boundary model is to the rest of the package: the solver, the scene builder, the
+measurements and the studies ask it instead of branching on its name.
+
+Each model module (dynamic, mdbc, lennard_jones, monaghan_kajtar, planes) defines one
+``BoundaryModel`` as ``MODEL``; its name is the run setting ``boundary`` (``planes``: the run setting
+``wall_planes``). The device side of a model (its pair term, its density) is in the same module;
+``boundaries.build`` combines them for the passes.
+"""
+import math
+
+
+class BoundaryModel:
+    """A wall treatment. The defaults are those of a wall of particles that only pushes."""
+
+    name = ""
+    # the wall particles carry a density and a fluid volume: they enter the fluid's kernel sums, so a
+    # wall is a kernel support of layers deep and each wall particle needs a neighbour list of its own
+    volume = False
+    # the wall particles' density follows the continuity equation (plain dynamic boundaries)
+    continuity = False
+    # the wall pushes with a force of its own that stores energy (the census counts it)
+    repulsive = False
+
+    def layers(self, hdx: float) -> int:
+        """Layers of wall particles: a kernel support (2h) deep for walls with a volume, else one."""
+        return int(math.ceil(2.0 * hdx)) if self.volume else 1
+
+    def spacing(self, dx: float, mk_beta: float) -> float:
+        """Spacing of the wall particles along a wall."""
+        return dx
+
+    def run_settings(self) -> dict:
+        """The run settings that choose this model."""
+        return {"boundary": self.name}
+
+    def prepare(self, solver):
+        """Once, after the solver has allocated its state."""
+
+    def before_forces(self, solver):
+        """Each step, before the first force pass."""
+
+    def face_pressure(self, scalar):
+        """A device pass that reads the pressure on a wall face from the wall itself, or None when
+        the wall's own pressure is not usable there (the sensor then reads the fluid in front of it:
+        measure/sensors.py)."""
+        return None
