@@ -14,7 +14,6 @@ from gpusph_ros.scenes.build import build
 from gpusph_ros.scenes.schema import load_scene
 from gpusph_ros.scenes.yaml_input import value
 from gpusph_ros.share import data_dir
-from gpusph_ros.sph import Solver
 
 SCENE = load_scene("collapse_2d")
 WIDTH = SCENE.fluid[0].hi[0]
@@ -38,7 +37,7 @@ def main():
     results = []
     for per_width in args.per_width:
         model = build(SCENE, dx=WIDTH / per_width, precision=args.precision, device=args.device, **settings)
-        solver = Solver(model.config, model.particles)
+        solver = model.solver()
         start = time.perf_counter()
         fronts = []
         for T in points[:, 0]:

@@ -49,7 +49,6 @@ def cloud(device: str, repeat: int, targets=TARGETS):
     from gpusph_ros.measure.cloud import CloudPacker
     from gpusph_ros.output.messages import CloudBuilder
     from gpusph_ros.output.recording import BagRecorder
-    from gpusph_ros.sph import Solver
 
     rclpy.init()
     node = rclpy.create_node("bench_cloud")
@@ -60,7 +59,7 @@ def cloud(device: str, repeat: int, targets=TARGETS):
     with tempfile.TemporaryDirectory() as tmp:
         for target in targets:
             model = model_of_about(SCENE, target, device=device)
-            solver = Solver(model.config, model.particles)
+            solver = model.solver()
             packer = CloudPacker(solver)
             builder = CloudBuilder(packer.fields)
             recorder = BagRecorder(Path(tmp) / f"bag_{int(target)}", {"bench": "cloud"})

@@ -52,12 +52,12 @@ def run_series(scene_name: str, **settings) -> dict:
     from gpusph_ros.scenes.build import build_run
     from gpusph_ros.scenes.schema import load_scene
     from gpusph_ros.scenes.settings import resolve
-    from gpusph_ros.sph import HealthError, NeighbourOverflow, Solver
+    from gpusph_ros.sph import HealthError, NeighbourOverflow
 
     scene = load_scene(scene_name)
     config = resolve(scene, **settings)
     built = build_run(scene, config)
-    solver = Solver(built.config, built.particles)
+    solver = built.solver()
     measurements = Measurements(solver, built)
     rate, end = config.output.output_rate, config.output.end_time
     series = {"t": []}

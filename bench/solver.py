@@ -18,7 +18,6 @@ import warp as wp
 
 from gpusph_ros.scenes.build import build
 from gpusph_ros.scenes.schema import load_scene
-from gpusph_ros.sph import Solver
 
 from series import model_of_about
 
@@ -32,7 +31,7 @@ def measure(dx: float, precision: str, device: str, seconds: float, start_time: 
         dx = model.config.dx
     else:
         model = build(load_scene("dambreak1_thesis"), dx=dx, precision=precision, device=device)
-    solver = Solver(model.config, model.particles)
+    solver = model.solver()
     solver.advance(start_time)
     wp.synchronize_device(solver.device)
     neighbours = solver.mean_neighbours()

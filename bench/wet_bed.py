@@ -23,10 +23,10 @@ def main(argv=None):
                     help="a run setting (default: the wall's artificial viscosity off, as test_stoker runs it)")
     args = ap.parse_args(argv)
     wp.config.log_level = wp.LOG_WARNING  # no per-module load lines
-    from gpusph_ros.analysis.stoker import stoker, surge
     from gpusph_ros.runner import Run
     from gpusph_ros.scenes.schema import load_scene
     from gpusph_ros.scenes.settings import resolve
+    from gpusph_ros.theory.stoker import stoker, surge
 
     scene = load_scene("stoker_2d")
     run = Run(scene, resolve(scene, dx=args.dx, sets=args.set))

@@ -14,12 +14,11 @@ import warp as wp
 
 from .scenes import reduce
 from .scenes.build import build_run
-from .sph import Solver
 
 
 def plan(scene, run_config, calibration_steps: int = 30) -> dict:
     model = build_run(scene, run_config)
-    solver = Solver(model.config, model.particles)
+    solver = model.solver()
     solver.step()  # loads the kernels: not timed
     wp.synchronize_device(solver.device)
     t0, steps0 = solver.time, solver.steps

@@ -19,7 +19,7 @@ from .measure.suite import Measurements
 from .output import messages
 from .output.recording import BagRecorder, qos_yaml
 from .scenes.build import build_run
-from .sph import HealthError, NeighbourOverflow, Solver
+from .sph import HealthError, NeighbourOverflow
 
 NAMESPACE = "/sim_node"
 # QoS the node offers and the recording states (rosbag2 replays with it): /clock as Gazebo's bridge
@@ -36,7 +36,7 @@ class Run:
         self.output = run_config.output
         self.namespace, self.frame_id = namespace, frame_id
         self.model = build_run(scene, run_config)
-        self.solver = Solver(self.model.config, self.model.particles)
+        self.solver = self.model.solver()
         self.measurements = Measurements(self.solver, self.model)
         self.packer = CloudPacker(self.solver)
         self.cloud = messages.CloudBuilder(self.packer.fields, frame_id=frame_id)

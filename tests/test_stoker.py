@@ -1,4 +1,4 @@
-"""Stoker's wet-bed dam break (analysis/stoker.py) and the surge SPH makes of it.
+"""Stoker's wet-bed dam break (theory/stoker.py) and the surge SPH makes of it.
 
 - The analytic solution against an independent one: a first-order HLL finite-volume solution of the
   shallow-water equations (Toro, Shock-Capturing Methods for Free-Surface Shallow Flows, 2001,
@@ -15,10 +15,10 @@ import math
 import numpy as np
 import pytest
 
-from gpusph_ros.analysis.stoker import depth_at, stoker, surge
 from gpusph_ros.runner import Run
 from gpusph_ros.scenes.schema import load_scene
 from gpusph_ros.scenes.settings import resolve
+from gpusph_ros.theory.stoker import depth_at, stoker, surge
 
 G = 9.81
 

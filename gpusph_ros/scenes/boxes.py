@@ -14,7 +14,7 @@ import numpy as np
 from ..sph import boundaries
 from ..sph.config import Plane, SolverConfig
 from ..sph.eos import hydrostatic_density
-from ..sph.solver import Particles
+from ..sph.particles import Particles
 from ..sph.state import BOUNDARY, FLUID
 
 PLANES = boundaries.planes.MODEL.name

@@ -12,7 +12,8 @@ import numpy as np
 
 from ..sph import boundaries
 from ..sph.config import ConfigError, Plane, SolverConfig, check_device
-from ..sph.solver import Particles
+from ..sph.particles import Particles
+from ..sph.solver import Solver
 from ..sph.state import BOUNDARY, FLUID
 from . import reduce, resources
 from .boxes import box_tank, cells, fill_box
@@ -32,6 +33,10 @@ class Model:
     @property
     def fluid_particles(self) -> int:
         return int((self.particles.ptype == FLUID).sum())
+
+    def solver(self) -> Solver:
+        """A solver that starts from this model."""
+        return Solver(self.config, self.particles)
 
 
 def _inside(pts, lo, hi, dim):

@@ -9,7 +9,7 @@
 - ``2d_until_reflection``: a 3D scene whose fluid spans the tank's width but whose obstacles do not
   (DamBreak 1) becomes the x-z section without those obstacles. Upstream of an obstacle it is the
   same flow until the obstacle's reflection comes back (``valid_until``): the front reaches the
-  obstacle at the bore speed of shallow-water theory (Stoker's on a wet bed, analysis/stoker.py;
+  obstacle at the bore speed of shallow-water theory (Stoker's on a wet bed, theory/stoker.py;
   Ritter's 2 sqrt(g H) on a dry one), and nothing travels back upstream faster than sqrt(g H).
   Probes downstream of such an obstacle's upstream face are dropped.
 - ``crop``: along each horizontal axis, the tank is cut to what a disturbance can reach before the
@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 from ..sph.config import ConfigError
 from ..sph.neighbours import shortest_period
+from ..theory.stoker import stoker
 from .boxes import PLANES
 from .schema import Scene
 
@@ -105,8 +106,6 @@ def _narrow_obstacles(scene: Scene) -> list:
 def _front_speed(scene: Scene, g: float, depth: float) -> float:
     """The speed of a dam-break front of a column ``depth`` deep in ``scene``: Stoker's bore on its wet
     bed, Ritter's 2 sqrt(g H) dry."""
-    from ..analysis.stoker import stoker
-
     if 0.0 < scene.wet_bed < depth:
         return stoker(depth, scene.wet_bed, g).bore_speed
     return 2.0 * math.sqrt(g * depth)

@@ -13,7 +13,7 @@ from pathlib import Path
 
 from ..sph import boundaries
 from ..sph.config import ConfigError, SolverConfig
-from ..sph.solver import default_max_neighbours
+from ..sph.neighbours import default_max_neighbours
 from .boxes import cells
 
 HOST_BYTES = 200  # numpy arrays of the particle set and the lattice fills, per particle

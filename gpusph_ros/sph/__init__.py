@@ -3,7 +3,8 @@
 from .config import BOUNDARIES, DENSITY_DIFFUSIONS, KERNELS, PRECISIONS, VISCOSITIES, ConfigError, Plane, SolverConfig
 from .health import HealthError
 from .neighbours import NeighbourOverflow
-from .solver import Particles, Solver
+from .particles import Particles
+from .solver import Solver
 from .state import BOUNDARY, FLUID
 
 __all__ = [

@@ -61,9 +61,15 @@ NO_FAILURE = 2 ** 31 - 1
 CLUMP_WALL_DX = 1.5  # [dx] clumping is not counted this close to a wall or solid
 CLUMP_MIN = 16  # clumped particles below which no fraction is a failure: in a run of 18 particles one pair is 11%
 NO_ENERGY = 1.0e300  # the energy check's "no reference yet"
-# the census sums before any census (census, census_check): energy, energy at the start, largest
-# clumped fraction, largest energy rise, lowest and highest healthy fluid density
-CENSUS_START = (0.0, NO_ENERGY, 0.0, 0.0, 1.0e300, -1.0e300)
+# slots of the census sums (census, census_check): the candidate's energy, the energy at the start,
+# the largest clumped fraction, the largest energy rise, the lowest and highest healthy fluid density
+ENERGY, ENERGY_START, PEAK_CLUMPED, PEAK_ENERGY_GROWTH, RHO_LOW, RHO_HIGH = range(6)
+CENSUS_START = (0.0, NO_ENERGY, 0.0, 0.0, 1.0e300, -1.0e300)  # before any census
+# slots of the clumping count: clumped fluid particles away from walls, the first of them
+CLUMPED, FIRST_CLUMPED = range(2)
+# slots of the excluded mass: the fluid mass excluded, the time of the first exclusion (-1 before)
+MASS, FIRST_TIME = range(2)
+T, DT = state.T, state.DT
 
 
 class HealthError(RuntimeError):
@@ -174,13 +180,13 @@ def build(scalar):
         A failed step's exclusions stay pending for the report."""
         if pending_mass[0] <= wp.float64(0.0):
             return
-        if excluded_mass[0] + pending_mass[0] > p.excluded_limit:
+        if excluded_mass[MASS] + pending_mass[0] > p.excluded_limit:
             fail[EXCLUDED_FRACTION] = 0
         if not healthy(fail):
             return
-        if excluded_mass[1] < wp.float64(0.0):
-            excluded_mass[1] = clock[0] + clock[1]
-        excluded_mass[0] = excluded_mass[0] + pending_mass[0]
+        if excluded_mass[FIRST_TIME] < wp.float64(0.0):
+            excluded_mass[FIRST_TIME] = clock[T] + clock[DT]
+        excluded_mass[MASS] = excluded_mass[MASS] + pending_mass[0]
         pending_mass[0] = wp.float64(0.0)
         for k in range(N_REASONS):
             excluded[k] = excluded[k] + pending[k]
@@ -197,42 +203,41 @@ def build(scalar):
                mass: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32),
                clumped: wp.array(dtype=wp.int32), faulty: wp.array(dtype=wp.int32), solid_lo: wp.array(dtype=vec),
                solid_hi: wp.array(dtype=vec), total: wp.array(dtype=wp.float64), count: wp.array(dtype=wp.int32)):
-        """total[0] += the fluid's kinetic + potential + elastic energy; total[4], total[5] hold the
-        lowest and highest density of a fluid particle not at fault seen in any census; count =
-        [clumped fluid particles away from walls, the first of them] (one launch: atomics)."""
+        """total[ENERGY] += the fluid's kinetic + potential + elastic energy; total[RHO_LOW],
+        total[RHO_HIGH] hold the lowest and highest density of a fluid particle not at fault seen in
+        any census; count[CLUMPED] counts the clumped fluid particles away from walls and
+        count[FIRST_CLUMPED] holds the first of them (one launch: atomics)."""
         i = wp.tid()
         if ptype[i] != FLUID:
             return
         if faulty[i] == 0:
-            wp.atomic_min(total, 4, wp.float64(rho[i]))
-            wp.atomic_max(total, 5, wp.float64(rho[i]))
+            wp.atomic_min(total, RHO_LOW, wp.float64(rho[i]))
+            wp.atomic_max(total, RHO_HIGH, wp.float64(rho[i]))
         if clumped[i] != 0 and not near_wall(p, pos[i], solid_lo, solid_hi):
-            wp.atomic_add(count, 0, 1)
-            wp.atomic_min(count, 1, ids[i])
+            wp.atomic_add(count, CLUMPED, 1)
+            wp.atomic_min(count, FIRST_CLUMPED, ids[i])
         u = vel[i]
         e = mass[i] * (scalar(0.5) * wp.dot(u, u) - wp.dot(p.gravity, pos[i])
                        + elastic_energy(rho[i], p.rho0, p.eos_b, p.gamma))
-        wp.atomic_add(total, 0, wp.float64(e))
+        wp.atomic_add(total, ENERGY, wp.float64(e))
 
     @wp.kernel(enable_backward=False, module="unique")
     def census_check(p: Params, total: wp.array(dtype=wp.float64), count: wp.array(dtype=wp.int32),
                      fail: wp.array(dtype=wp.int32)):
-        """total = [candidate's energy, energy at the start (or NO_ENERGY before the first check),
-        the largest clumped fraction seen, the largest rise of the energy above its start, ...]:
-        flags energy_growth when the candidate exceeds the start by the slack, clumping when too
-        many particles have clumped."""
-        e = total[0]
-        if total[1] == wp.float64(1.0e300):  # NO_ENERGY, written as a literal: a Python float would be float32
-            total[1] = e
-        total[3] = wp.max(total[3], e - total[1])
-        if p.energy_slack > wp.float64(0.0) and e > total[1] + p.energy_slack:
+        """Flags energy_growth when the candidate's energy exceeds the start's (NO_ENERGY before the
+        first check) by the slack, clumping when too many particles have clumped; keeps the peaks."""
+        e = total[ENERGY]
+        if total[ENERGY_START] == wp.float64(1.0e300):  # NO_ENERGY as a literal: a Python float would be float32
+            total[ENERGY_START] = e
+        total[PEAK_ENERGY_GROWTH] = wp.max(total[PEAK_ENERGY_GROWTH], e - total[ENERGY_START])
+        if p.energy_slack > wp.float64(0.0) and e > total[ENERGY_START] + p.energy_slack:
             fail[ENERGY_GROWTH] = 0
-        fraction = wp.float64(count[0]) / wp.float64(p.n_fluid)
-        total[2] = wp.max(total[2], fraction)
-        if p.clump_r > scalar(0.0) and fraction > p.clump_fraction and count[0] > CLUMP_MIN:
-            fail[CLUMPING] = count[1]
-        count[0] = 0  # ready for the next census
-        count[1] = NO_FAILURE
+        fraction = wp.float64(count[CLUMPED]) / wp.float64(p.n_fluid)
+        total[PEAK_CLUMPED] = wp.max(total[PEAK_CLUMPED], fraction)
+        if p.clump_r > scalar(0.0) and fraction > p.clump_fraction and count[CLUMPED] > CLUMP_MIN:
+            fail[CLUMPING] = count[FIRST_CLUMPED]
+        count[CLUMPED] = 0  # ready for the next census
+        count[FIRST_CLUMPED] = NO_FAILURE
 
     return SimpleNamespace(healthy=healthy, check_particles=check_particles, exclusion_check=exclusion_check,
                            census=census, census_check=census_check)

@@ -30,6 +30,14 @@ def shortest_period(h: float) -> float:
     return 3 * LIST_SKIN * 2.0 * h
 
 
+def default_max_neighbours(dim: int, hdx: float) -> int:
+    """Room for 2.5x the neighbours of a uniform lattice (a wall of finer boundary particles adds
+    fewer than the half-support of fluid it replaces)."""
+    radius = LIST_SKIN * 2.0 * hdx
+    expected = (4.0 / 3.0 * math.pi * radius ** 3) if dim == 3 else (math.pi * radius ** 2)
+    return int(8 * math.ceil(2.5 * expected / 8))
+
+
 class NeighbourOverflow(RuntimeError):
     """More neighbours than the list holds (particles clumped or the list is too narrow)."""
 

@@ -26,6 +26,9 @@ from . import boundaries, density, eos, health, kernels, momentum, neighbours, s
 FLUID = state.FLUID
 BOUNDARY = state.BOUNDARY
 EXCLUDED = state.EXCLUDED
+T, DT, DT_STABLE, T_FAILED = state.T, state.DT, state.DT_STABLE, state.T_FAILED
+STEP, FAILED_STEP = state.STEP, state.FAILED_STEP
+ENERGY = health.ENERGY
 ARTIFICIAL = viscosity.VISCOSITY_ID["artificial"]
 SPS = viscosity.VISCOSITY_ID["sps"]
 
@@ -207,7 +210,7 @@ def _force_passes(scalar):
     def wall_energy(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32),
                     pos: wp.array(dtype=vec), mass: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
                     total: wp.array(dtype=wp.float64), chunk: int, stride: int):
-        """total[0] += the energy the repulsive walls (Lennard-Jones, Monaghan-Kajtar) hold, so that
+        """total[ENERGY] += the energy the repulsive walls (Lennard-Jones, Monaghan-Kajtar) hold, so that
         the census sums what a conservative wall conserves: a fluid particle pressed against such a
         wall gives that energy back as motion."""
         i = wp.tid() * stride + chunk
@@ -220,7 +223,7 @@ def _force_passes(scalar):
             if ptype[j] == BOUNDARY:
                 e += repulsion_potential(p, mass[i], mass[j], wp.length(separation(grid, pos[i], pos[j])))
         if e > scalar(0.0):
-            wp.atomic_add(total, 0, wp.float64(mass[i] * e))
+            wp.atomic_add(total, ENERGY, wp.float64(mass[i] * e))
 
     @wp.kernel(enable_backward=False, module="unique")
     def shepard(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32), f: Fields,
@@ -268,15 +271,15 @@ def _time_passes(scalar):
                 dt = wp.min(dt, cfl * wp.sqrt(h / wp.float64(a_max)))
             if p.viscosity != ARTIFICIAL and p.nu > scalar(0.0):
                 dt = wp.min(dt, cfl * wp.float64(0.125) * h * h / wp.float64(p.nu))
-        clock[2] = dt  # the step the stability limits allow, before landing on t_target
-        remaining = t_target - clock[0]
-        if remaining <= wp.float64(1.0e-12) * wp.max(wp.float64(1.0), clock[0]):
+        clock[DT_STABLE] = dt  # the step the stability limits allow, before landing on t_target
+        remaining = t_target - clock[T]
+        if remaining <= wp.float64(1.0e-12) * wp.max(wp.float64(1.0), clock[T]):
             dt = wp.float64(0.0)
         elif dt > remaining:
             dt = remaining
         if not healthy(fail):
             dt = wp.float64(0.0)
-        clock[1] = dt
+        clock[DT] = dt
 
     @wp.kernel(enable_backward=False, module="unique")
     def integrate(p: Params, clock: wp.array(dtype=wp.float64), factor: scalar, pos: wp.array(dtype=vec),
@@ -291,7 +294,7 @@ def _time_passes(scalar):
         Boundary particles keep position and velocity; dynamic ones update density.
         """
         i = wp.tid()
-        dt = factor * scalar(clock[1])
+        dt = factor * scalar(clock[DT])
         rho_out[i] = rho[i] + dt * drho[i]
         if ptype[i] != FLUID:
             pos_out[i] = pos[i]
@@ -306,7 +309,7 @@ def _time_passes(scalar):
                 x[ax] = x[ax] - span * wp.floor((x[ax] - p.lo[ax]) / span)
         pos_out[i] = x
         u = vel[i] + dt * acc[i]
-        if p.settle_tau > wp.float64(0.0) and clock[0] < p.settle_until:
+        if p.settle_tau > wp.float64(0.0) and clock[T] < p.settle_until:
             u = u / (scalar(1.0) + dt / scalar(p.settle_tau))
         vel_out[i] = u
 
@@ -356,12 +359,12 @@ def _time_passes(scalar):
     def tick(fail: wp.array(dtype=wp.int32), clock: wp.array(dtype=wp.float64), steps: wp.array(dtype=wp.int32)):
         """Advance time and step count, or record when the first failing step would have ended."""
         if healthy(fail):
-            if clock[1] > wp.float64(0.0):
-                clock[0] = clock[0] + clock[1]
-                steps[0] = steps[0] + 1
-        elif steps[1] < 0:
-            steps[1] = steps[0] + 1
-            clock[3] = clock[0] + clock[1]
+            if clock[DT] > wp.float64(0.0):
+                clock[T] = clock[T] + clock[DT]
+                steps[STEP] = steps[STEP] + 1
+        elif steps[FAILED_STEP] < 0:
+            steps[FAILED_STEP] = steps[STEP] + 1
+            clock[T_FAILED] = clock[T] + clock[DT]
 
     return SimpleNamespace(choose_dt=choose_dt, integrate=integrate, commit=commit, permute=permute, tick=tick)
 

@@ -7,7 +7,6 @@ dt, step count, health flags) is read to decide how many steps fit before the ta
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 import warp as wp
@@ -16,8 +15,9 @@ from . import boundaries, density, health, kernels, passes, viscosity
 from .config import SolverConfig, check_device
 from .health import HealthError
 from .launch import Launcher
-from .neighbours import NeighbourList, NeighbourOverflow
-from .state import EXCLUDED, FLUID
+from .neighbours import NeighbourList, NeighbourOverflow, default_max_neighbours
+from .particles import Particles
+from .state import DT, DT_STABLE, EXCLUDED, FAILED_STEP, FLUID, N_CLOCK, STEP, T_FAILED, T
 
 _MAX_BATCH = 64  # steps launched between two reads of the clock
 # steps between two sorts of the particle arrays into cell order: neighbours then sit next to each
@@ -26,39 +26,6 @@ _REORDER_EVERY = 16
 # steps between two energy and clumping checks: the sums are one atomic launch, cheap but not free
 # on a GPU
 _CENSUS_EVERY = 16
-
-
-@dataclass
-class Particles:
-    """Host-side particle set a solver starts from (one row per particle, SI units)."""
-
-    pos: np.ndarray
-    vel: np.ndarray
-    rho: np.ndarray
-    mass: np.ndarray
-    ptype: np.ndarray
-    body: np.ndarray = field(default=None)
-
-    def __post_init__(self):
-        n = len(self.pos)
-        self.pos = np.asarray(self.pos, dtype=np.float64).reshape(n, 3)
-        self.vel = np.asarray(self.vel, dtype=np.float64).reshape(n, 3)
-        self.rho = np.asarray(self.rho, dtype=np.float64).reshape(n)
-        self.mass = np.asarray(self.mass, dtype=np.float64).reshape(n)
-        self.ptype = np.asarray(self.ptype, dtype=np.int32).reshape(n)
-        self.body = (np.full(n, -1, dtype=np.int32) if self.body is None
-                     else np.asarray(self.body, dtype=np.int32).reshape(n))
-
-    def __len__(self):
-        return len(self.pos)
-
-
-def default_max_neighbours(dim: int, hdx: float) -> int:
-    """Room for 2.5x the neighbours of a uniform lattice (a wall of finer boundary particles adds
-    fewer than the half-support of fluid it replaces)."""
-    radius = NeighbourList.SKIN * 2.0 * hdx
-    expected = (4.0 / 3.0 * math.pi * radius ** 3) if dim == 3 else (math.pi * radius ** 2)
-    return int(8 * math.ceil(2.5 * expected / 8))
 
 
 class Solver:
@@ -205,8 +172,8 @@ class Solver:
         self._pending_mass = wp.zeros(1, dtype=wp.float64, device=dev)
         self._excluded = wp.zeros(health.N_REASONS, dtype=wp.int32, device=dev)
         self._excluded_mass = arr(np.array([0.0, -1.0]), wp.float64)
-        self._clock = wp.zeros(4, dtype=wp.float64, device=dev)  # t, dt, stable dt, time of a failed step
-        self._steps = arr(np.array([0, -1], dtype=np.int32), wp.int32)  # steps, failed step
+        self._clock = wp.zeros(N_CLOCK, dtype=wp.float64, device=dev)  # slots state.T, DT, DT_STABLE, T_FAILED
+        self._steps = arr(np.array([0, -1], dtype=np.int32), wp.int32)  # slots state.STEP, FAILED_STEP
         wp.launch(self._passes.equation_of_state, dim=n, inputs=[self.params, self.fields], device=dev)
         self.boundary.prepare(self)
 
@@ -256,7 +223,7 @@ class Solver:
                           self.solid_lo, self.solid_hi, self._fail, self._faulty, self._pending,
                           self._pending_mass], device=dev)
         if self._launched % _CENSUS_EVERY == 0:
-            self._energy_sum[0:1].zero_()
+            self._energy_sum[health.ENERGY:health.ENERGY + 1].zero_()
             wp.launch(k.census, dim=n, inputs=[p, self._pos_c, self._vel_c, self._rho_c, self.mass, self.ptype,
                                                self.ids, self._clumped, self._faulty, self.solid_lo,
                                                self.solid_hi, self._energy_sum, self._clump_count], device=dev)
@@ -291,8 +258,8 @@ class Solver:
         clock = self._clock.numpy()
         steps = self._steps.numpy()
         fail = self._fail.numpy()
-        self.time, self.dt, self.dt_stable = float(clock[0]), float(clock[1]), float(clock[2])
-        self.steps = int(steps[0])
+        self.time, self.dt, self.dt_stable = float(clock[T]), float(clock[DT]), float(clock[DT_STABLE])
+        self.steps = int(steps[STEP])
         self._excluded_host = (self._excluded.numpy(), self._excluded_mass.numpy())
         self._census_host = self._energy_sum.numpy()
         for check, idx in zip(health.CHECKS, fail):
@@ -300,21 +267,23 @@ class Solver:
                 continue
             if check == "excluded_fraction":
                 counts = self._excluded_host[0] + self._pending.numpy()
-                mass = self._excluded_host[1][0] + float(self._pending_mass.numpy()[0])
-                raise HealthError(check, int(steps[1]), float(clock[3]), -1,
+                mass = self._excluded_host[1][health.MASS] + float(self._pending_mass.numpy()[0])
+                raise HealthError(check, int(steps[FAILED_STEP]), float(clock[T_FAILED]), -1,
                                   f"{mass / self._fluid_mass:.2%} of the fluid mass would be excluded "
                                   f"({self.describe_excluded(counts)}), more than max_excluded_fraction "
                                   f"{self.config.max_excluded_fraction:.2%}")
             if check in health.GLOBAL_CHECKS:
                 e = self._energy_sum.numpy()
-                raise HealthError(check, int(steps[1]), float(clock[3]), -1,
-                                  f"fluid energy {e[0]:.6g} J, {e[0] - e[1]:.3g} J above its start "
+                raise HealthError(check, int(steps[FAILED_STEP]), float(clock[T_FAILED]), -1,
+                                  f"fluid energy {e[health.ENERGY]:.6g} J, "
+                                  f"{e[health.ENERGY] - e[health.ENERGY_START]:.3g} J above its start "
                                   f"({self.config.energy_growth_ratio:g} M g H = {self._energy_slack:.3g} J allowed)")
             detail = ""
             if check == "clumping":
-                detail = (f"{self._energy_sum.numpy()[2]:.1%} of the fluid particles have a neighbour closer than "
+                clumped = self._energy_sum.numpy()[health.PEAK_CLUMPED]
+                detail = (f"{clumped:.1%} of the fluid particles have a neighbour closer than "
                           f"{self.config.clump_ratio:g} dx (more than {self.config.clump_fraction:.0%} allowed)")
-            raise HealthError(check, int(steps[1]), float(clock[3]), int(idx), detail)
+            raise HealthError(check, int(steps[FAILED_STEP]), float(clock[T_FAILED]), int(idx), detail)
         overflow = int(self.neighbours.overflow.numpy()[0])
         if overflow:
             raise NeighbourOverflow(f"a particle has {overflow} neighbours, more than the list's "
@@ -333,7 +302,7 @@ class Solver:
     @property
     def excluded_fraction(self) -> float:
         """The excluded fluid's share of the fluid mass."""
-        return float(self._excluded_host[1][0]) / self._fluid_mass if self._fluid_mass > 0.0 else 0.0
+        return float(self._excluded_host[1][health.MASS]) / self._fluid_mass if self._fluid_mass > 0.0 else 0.0
 
     @property
     def health_peaks(self) -> dict:
@@ -346,16 +315,17 @@ class Solver:
         e = self._census_host
         cfg = self.config
         mgh = self._fluid_mass * cfg.g_norm * cfg.depth
-        seen = e[4] <= e[5]
-        return {"peak_clumped_fraction": float(e[2]),
-                "min_density_ratio": float(e[4]) / cfg.rho0 if seen else None,
-                "max_density_ratio": float(e[5]) / cfg.rho0 if seen else None,
-                "peak_energy_growth": float(e[3]) / mgh if mgh > 0.0 else None}
+        low, high = e[health.RHO_LOW], e[health.RHO_HIGH]
+        seen = low <= high
+        return {"peak_clumped_fraction": float(e[health.PEAK_CLUMPED]),
+                "min_density_ratio": float(low) / cfg.rho0 if seen else None,
+                "max_density_ratio": float(high) / cfg.rho0 if seen else None,
+                "peak_energy_growth": float(e[health.PEAK_ENERGY_GROWTH]) / mgh if mgh > 0.0 else None}
 
     @property
     def first_excluded_time(self) -> "float | None":
         """Simulated time of the step that excluded the first particle; None before any."""
-        t = float(self._excluded_host[1][1])
+        t = float(self._excluded_host[1][health.FIRST_TIME])
         return None if t < 0.0 else t
 
     @staticmethod
@@ -421,7 +391,7 @@ class Solver:
         self._fail.assign(np.full(health.N_CHECKS, health.NO_FAILURE, dtype=np.int32))
         self._pending.zero_()
         self._pending_mass.zero_()
-        self._steps.assign(np.array([self._steps.numpy()[0], -1], dtype=np.int32))
+        self._steps.assign(np.array([self._steps.numpy()[STEP], -1], dtype=np.int32))
         self.neighbours.overflow.zero_()
 
     # -- state out ------------------------------------------------------------------------

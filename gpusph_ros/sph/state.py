@@ -10,6 +10,13 @@ FLUID = 0
 BOUNDARY = 1
 EXCLUDED = 2  # a fluid particle taken out of the flow by a fault (health.py): no pass reads it
 
+# slots of the device clock (float64): the time, the step about to be taken, the step the stability
+# limits allow, and when the first failed step would have ended
+T, DT, DT_STABLE, T_FAILED = range(4)
+N_CLOCK = 4
+# slots of the step counter: steps taken, and the first failed step (-1 while none)
+STEP, FAILED_STEP = range(2)
+
 
 @functools.lru_cache(maxsize=None)
 def build(scalar):

@@ -73,14 +73,14 @@ def trial(scene_name: str, settings: dict) -> str:
     from ..scenes.build import build_run
     from ..scenes.schema import load_scene
     from ..scenes.settings import resolve
-    from ..sph import HealthError, NeighbourOverflow, Solver
+    from ..sph import HealthError, NeighbourOverflow
 
     scene = load_scene(scene_name)
     # strict unless the settings say otherwise: a fault of one particle is a failure here, as when
     # docs/stability was measured (before particles could be excluded)
     config = resolve(scene, **{"max_excluded_fraction": 0.0, **settings})
     model = build_run(scene, config)
-    solver = Solver(model.config, model.particles)
+    solver = model.solver()
     try:
         solver.advance(config.output.end_time)
     except HealthError as err:
