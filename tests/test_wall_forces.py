@@ -1,6 +1,6 @@
-"""The repulsive wall forces (sph/boundaries/lennard_jones.py, monaghan_kajtar.py): Monaghan & Kajtar's (2009) claims for their force,
-the energies the census counts for both repulsive walls, and the stability study's collapse, where
-the first implementation let the surge through the wall."""
+"""The repulsive wall forces (sph/boundaries/lennard_jones.py, monaghan_kajtar.py): Monaghan &
+Kajtar's (2009) claims for their force, the energies the census counts for both repulsive walls,
+and the stability study's collapse, where the first implementation let the surge through the wall."""
 import numpy as np
 import pytest
 

@@ -21,7 +21,7 @@ MDBC_SLIPS = boundaries.mdbc.SLIPS
 DENSITY_DIFFUSIONS = density.DIFFUSIONS
 PRECISIONS = ("float32", "float64")
 
-# guards against runs that could never finish or never fit (README, "Limits and failure behaviour")
+# guards against runs that could never finish or never fit (docs/limits.md)
 MIN_CFL = 0.01  # a smaller Courant number takes > 100x the steps of the default for no accuracy
 MIN_DT_FIXED = 1.0e-6  # [s] a fixed step below this is a million steps per simulated second
 MAX_PARTICLES = 50_000_000  # default cap on a run's particles (max_particles)

@@ -311,7 +311,7 @@ class Solver:
         walls), the lowest and highest density of a healthy fluid particle as ratios of rho0, and
         the largest rise of the fluid's energy above its start in M g H, as of the last sync (host
         copies only, so any thread may ask). A limit is set against what healthy runs reach
-        (README, docs/defaults.md)."""
+        (docs/limits.md, docs/defaults.md)."""
         e = self._census_host
         cfg = self.config
         mgh = self._fluid_mass * cfg.g_norm * cfg.depth
