@@ -17,7 +17,7 @@ pytestmark = pytest.mark.unit
     ("cfl", 1.0e-12, "[0.01, 1]"),
     ("dt_fixed", 1.0e-12, "0 (adaptive) or a step >= 1e-06 s"),
     ("max_particles", 0, "a whole number >= 1"),
-    ("dx", -0.01, "> 0"),
+    ("dx", -0.01, "[0.0001, 10]"),
     ("hdx", 0.0, "> 0"),
     ("shepard_every", -1, ">= 0"),
     ("cpu_threads", 1.5, ">= 0"),

@@ -81,9 +81,12 @@ def test_the_particle_bound_holds_and_the_memory_estimate_is_close(scene, dx, bo
 
 def test_a_spacing_too_fine_is_refused_with_the_numbers_before_any_allocation():
     with pytest.raises(ConfigError) as err:
-        build(load_scene("dambreak1_thesis"), dx=1.0e-6)
+        build(load_scene("dambreak1_thesis"), dx=1.0e-4)
     text = str(err.value)
-    assert text.startswith("dx: 1e-06") and "particles" in text and "GiB" in text and "max_particles" in text
+    assert text.startswith("dx: 0.0001") and "particles" in text and "GiB" in text and "max_particles" in text
+    with pytest.raises(ConfigError) as err:  # below the setting's range: refused before any planning
+        build(load_scene("dambreak1_thesis"), dx=1.0e-6)
+    assert str(err.value).startswith("dx: 1e-06") and "[0.0001, 10]" in str(err.value)
     with pytest.raises(ConfigError) as err:
         build(load_scene("dambreak1_thesis"), dx=0.03, max_particles=1000)
     assert "max_particles is 1,000" in str(err.value)

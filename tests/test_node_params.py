@@ -42,7 +42,7 @@ def test_defaults_describe_a_run():
     ({"viscosity": "sps"}, ["viscosity", "artificial, laminar", "sps true"]),
     ({"sps": True}, ["sps", "laminar", "'artificial'"]),
     ({"boundary": "planes"}, ["boundary", "lennard_jones, monaghan_kajtar, dynamic"]),
-    ({"dx": 0.0}, ["dx", "[0.001, 1]"]),
+    ({"dx": 0.0}, ["dx", "[0.0001, 10]"]),
     ({"cfl": 1.5}, ["cfl", "[0.01, 1]"]),
     ({"device": "cuda:7"}, ["device", "'cuda:7'", "cpu"]),
     ({"scene": "no_such_scene"}, ["scene", "no_such_scene", "dambreak1_thesis"]),

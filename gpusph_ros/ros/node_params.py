@@ -14,11 +14,10 @@ from ..output.recording import folder_problem
 from ..scenes.reduce import MODELS
 from ..scenes.schema import builtin_names, load_scene
 from ..scenes.settings import resolve
-from ..sph.config import BOUNDARIES, DENSITY_DIFFUSIONS, KERNELS, MDBC_SLIPS, PRECISIONS, ConfigError
+from ..sph.config import LIVE, RESET, ConfigError, SolverConfig
 
-# when a change takes effect
-RESET = "reset"  # needs new particles or buffers: at the next ~/reset
-LIVE = "live"  # from the next step or output
+# when a change takes effect: RESET (needs new particles or buffers: at the next ~/reset) and LIVE
+# (from the next step or output) as the solver's settings say, and
 RECORDING = "recording"  # at the next recording
 STARTUP = "startup"  # read-only, set at start-up
 
@@ -36,41 +35,39 @@ class Param:
     hi: float = None
 
 
+# the node's own defaults where they differ from the solver's: its default run is DamBreak 1 at
+# 3 cm, on the CPU whatever $GPUSPH_ROS_DEVICE says
+NODE_DEFAULTS = {"dx": 0.03, "device": "cpu"}
+
+
+def _solver_params() -> tuple:
+    """A parameter for each solver setting marked for the node (``sph.config.setting``): its meaning,
+    choices or range and when a change applies come from the setting itself."""
+    out = []
+    for f in dataclasses.fields(SolverConfig):
+        m = f.metadata
+        if m.get("node"):
+            default = NODE_DEFAULTS.get(f.name, f.default)
+            out.append(Param(f.name, default, m["doc"], m["applies"], choices=tuple(m["choices"] or ()), lo=m["lo"],
+                             hi=m["hi"]))
+    return tuple(out)
+
+
+SOLVER_PARAMS = _solver_params()
 PARAMS = (
     Param("scene", "dambreak1_thesis", "built-in scene name (" + ", ".join(builtin_names()) + ") or a path "
           "to a scene YAML file", RESET),
-    Param("dx", 0.03, "particle spacing [m]", RESET, lo=0.001, hi=1.0),
-    Param("kernel", "cubic_spline", "smoothing kernel (quadratic: thesis Eq. 2.5-2.8; cubic_spline: Eq. 2.9-2.10; "
-          "wendland: Wendland C2)", LIVE,
-          choices=KERNELS),
+    *SOLVER_PARAMS,
     Param("viscosity", "artificial", "viscosity model: artificial (Monaghan 1992; not in the thesis) or laminar "
           "(Morris 1997, thesis Eq. 2.16-2.17)", LIVE, choices=VISCOSITY_CHOICES),
     Param("sps", False, "add the sub-particle-scale turbulence stress to laminar viscosity (Dalrymple & Rogers "
           "2006, thesis Eq. 2.18-2.21); needs viscosity laminar", LIVE),
-    Param("boundary", "dynamic", "boundary particle model for walls the scene builds of particles: dynamic "
-          "(Crespo et al. 2007), mdbc (English et al. 2021), lennard_jones (thesis Eq. 2.24), monaghan_kajtar "
-          "(Eq. 2.26)", RESET, choices=BOUNDARIES),
-    Param("mdbc_slip", "none", "boundary velocity under mdbc: none (the wall's, zero), no_slip or free_slip", LIVE,
-          choices=MDBC_SLIPS),
-    Param("density_diffusion", "delta", "density treatment: none, or delta-SPH (Molteni & Colagrossi 2009)", LIVE,
-          choices=DENSITY_DIFFUSIONS),
     Param("model", "full", "how the scene is modelled: full, slab (a thin periodic slab across y) or 2d (the x-z "
           "section), for a flow uniform across y such as dambreak2_*; 2d_until_reflection (the x-z section without "
           "the narrow obstacles, for the probes upstream of them until their reflection returns)", RESET,
           choices=MODELS),
     Param("crop", False, "cut the tank to what a front moving at 2 sqrt(g H) reaches by the end time", RESET),
     Param("wall_planes", False, "every wall of boundary particles as a particle-less plane", RESET),
-    Param("precision", "float32", "floating-point precision of the solver state", RESET, choices=PRECISIONS),
-    Param("device", "cpu", "Warp device: cpu or cuda:N", RESET),
-    Param("visco_bound_factor", 1.0, "artificial viscosity between fluid and wall particles, as a multiple of "
-          "alpha (DualSPHysics' ViscoBoundFactor); it acts as a wall friction: 0 lets a surge run free", LIVE,
-          lo=0.0, hi=10.0),
-    Param("cfl", 0.4, "Courant number of the adaptive time step (Monaghan 1992, as GPUSPH)", LIVE, lo=0.01, hi=1.0),
-    Param("c0", 0.0, "speed of sound [m/s]; 0 = 10 sqrt(g H) with the scene's depth H (thesis Section 2.3)",
-          LIVE, lo=0.0, hi=1000.0),
-    Param("max_excluded_fraction", 0.01, "share of the fluid mass that may be excluded (a particle whose density, "
-          "position or step is at fault leaves the flow and is counted) before the run fails; 0 = the first "
-          "fault fails it", LIVE, lo=0.0, hi=0.99),
     Param("end_time", 0.0, "simulated time the run stops at [s]; 0 = the scene's own", LIVE, lo=0.0, hi=1.0e5),
     Param("output_rate", 0.0, "outputs per simulated second [Hz]: /clock, probes, wrenches and particles; "
           "0 = the scene's own", LIVE, lo=0.0, hi=1.0e4),
@@ -90,11 +87,9 @@ DEFAULTS = {p.name: p.default for p in PARAMS}
 # The one list of what a running session takes live, and where each setting goes: the solver's
 # numerics (Solver.reconfigure), the run's outputs (Run.set_output), the cloud (Run.set_cloud) or
 # the node's pacing. A LIVE parameter comes to the settings of the same name, except those below.
-LIVE_SETTINGS = {"kernel": "solver", "viscosity": "solver", "density_diffusion": "solver", "cfl": "solver",
-                 "c0": "solver", "max_excluded_fraction": "solver", "mdbc_slip": "solver",
-                 "visco_bound_factor": "solver", "end_time": "output",
-                 "output_rate": "output", "particle_rate": "output", "particle_fields": "cloud", "frame_id": "cloud",
-                 "real_time_factor": "pace"}
+LIVE_SETTINGS = {**{p.name: "solver" for p in SOLVER_PARAMS if p.applies == LIVE}, "viscosity": "solver",
+                 "end_time": "output", "output_rate": "output", "particle_rate": "output", "particle_fields": "cloud",
+                 "frame_id": "cloud", "real_time_factor": "pace"}
 _SETTINGS_OF = {"sps": ("viscosity",), "publish_particles": ("particle_rate",)}
 
 
@@ -154,7 +149,7 @@ def live_settings(values: dict, changed) -> dict:
     follow output_rate, and an output time depends on both rate and end time."""
     _, config = run_settings(values)
     out = config.output
-    resolved = {**values, "viscosity": config.numerics["viscosity"], "end_time": out.end_time,
+    resolved = {**values, "viscosity": config.solver.viscosity, "end_time": out.end_time,
                 "output_rate": out.output_rate, "particle_rate": out.particle_rate}
     touched = {s for name in changed for s in _SETTINGS_OF.get(name, (name,))}
     if any(LIVE_SETTINGS.get(s) == "output" for s in touched):
@@ -166,8 +161,7 @@ def run_settings(values: dict):
     """(scene, RunConfig) of the parameter ``values``; ConfigError when they make no run."""
     scene = load_scene(values["scene"])
     output = {k: values[k] for k in ("end_time", "output_rate") if values[k] > 0.0}
-    numerics = {k: values[k] for k in ("dx", "kernel", "boundary", "density_diffusion", "precision", "device",
-                                       "cfl", "c0", "max_excluded_fraction", "mdbc_slip", "visco_bound_factor")}
+    numerics = {p.name: values[p.name] for p in SOLVER_PARAMS}
     numerics["viscosity"] = "sps" if values["sps"] else values["viscosity"]
     reduction = {k: values[k] for k in ("model", "crop", "wall_planes")}
     # the node's clouds follow output_rate

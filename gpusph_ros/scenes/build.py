@@ -93,16 +93,20 @@ def floor_rectangles(extent, footprints, dim: int) -> list:
 
 def build_run(scene: Scene, run_config) -> Model:
     """The model of ``scene`` under ``run_config`` (``settings.resolve``), reduced as it asks."""
-    cfg = SolverConfig(**run_config.numerics)
+    cfg = run_config.solver
     reduced = reduce.apply(scene, run_config.reduction, run_config.output.end_time, cfg.dx, cfg.hdx)
-    return build(reduced, **run_config.numerics)
+    return build_from(reduced, cfg)
 
 
 def build(scene: Scene, **numerics) -> Model:
     """The model of ``scene`` with the given numerics (``SolverConfig`` fields: dx, kernel, ...)."""
+    return build_from(scene, SolverConfig(**numerics))
+
+
+def build_from(scene: Scene, cfg: SolverConfig) -> Model:
+    """The model of ``scene`` under the solver configuration ``cfg``, whose domain the scene sets."""
     dim, up = scene.dim, scene.dim - 1
-    cfg = SolverConfig(dim=dim, gravity=scene.gravity, depth=scene.depth, periodic=scene.periodic,
-                       **numerics).validate()
+    cfg = cfg.replace(dim=dim, gravity=scene.gravity, depth=scene.depth, periodic=scene.periodic).validate()
     dx = cfg.dx
     boxes = [(b.lo[:dim], b.hi[:dim]) for b in scene.fluid]
     if scene.wet_bed > 0.0:

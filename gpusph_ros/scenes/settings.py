@@ -11,16 +11,15 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
-from ..sph.config import ConfigError, SolverConfig
+from ..sph.config import ConfigError, Domain, HealthLimits, Numerics, SolverConfig, settings_of
 from . import yaml_input
 from .reduce import Reduction, apply
 from .schema import Scene, read_yaml, shipped
 
 # SolverConfig fields that the scene decides, or that the scene builder derives
-SCENE_FIELDS = ("dim", "gravity", "depth", "domain_lo", "domain_hi", "periodic", "planes", "wall_lo", "wall_hi",
-                "solids")
+SCENE_FIELDS = tuple(f.name for f in settings_of(Domain))
 MAX_OUTPUT_RATE = 10_000.0  # [Hz] simulated: outputs 0.1 ms apart, a wall-pressure transducer's rate
-NUMERIC_FIELDS = tuple(f.name for f in dataclasses.fields(SolverConfig) if f.name not in SCENE_FIELDS)
+NUMERIC_FIELDS = tuple(f.name for part in (Numerics, HealthLimits) for f in settings_of(part))
 
 
 @dataclass
@@ -49,9 +48,14 @@ _DEFAULTS = {**{f.name: f.default_factory() if f.default is dataclasses.MISSING 
 
 @dataclass
 class RunConfig:
-    numerics: dict  # SolverConfig fields
+    """One run's settings: the solver configuration (validated, built once, with the scene's
+    domain), the run settings that were named (``numerics``: what a layer set, for the record), the
+    outputs and the reduction."""
+
+    numerics: dict  # the SolverConfig fields some layer set
     output: Output
     reduction: Reduction = field(default_factory=Reduction)
+    solver: SolverConfig = None
 
     def as_dict(self) -> dict:
         return {**self.numerics, **dataclasses.asdict(self.output), **dataclasses.asdict(self.reduction)}
@@ -121,4 +125,4 @@ def resolve(scene: Scene, files=(), sets=(), **overrides) -> RunConfig:
     cfg = SolverConfig(dim=scene.dim, gravity=scene.gravity, depth=scene.depth, periodic=scene.periodic,
                        **numerics).validate()
     apply(scene, reduction, output.end_time, cfg.dx, cfg.hdx)  # a reduction the scene does not allow fails here
-    return RunConfig(numerics=numerics, output=output, reduction=reduction)
+    return RunConfig(numerics=numerics, output=output, reduction=reduction, solver=cfg)

@@ -1,8 +1,11 @@
 """Run configuration of the SPH solver: every numerical choice the thesis varies, by name.
 
-A configuration is plain data. ``SolverConfig.validate`` checks every field and raises
-``ConfigError`` naming the field, the value and what is allowed, so that a scene file, a CLI
-override or a ROS parameter all get the same message.
+``SolverConfig`` is three typed parts: ``Numerics`` (what a user sets), ``HealthLimits`` (the
+failure detectors' limits) and ``Domain`` (what the scene decides). Each field carries its meaning,
+its allowed values and when a change applies (``setting``), which validation, the run settings and
+the node's parameters all read. A configuration is plain data. ``SolverConfig.validate`` checks
+every field and raises ``ConfigError`` naming the field, the value and what is allowed, so that a
+scene file, a CLI override or a ROS parameter all get the same message.
 """
 from __future__ import annotations
 
@@ -62,75 +65,132 @@ class Plane:
     normal: tuple
 
 
-@dataclass
-class SolverConfig:
-    """Numerics of one run. Units are SI throughout."""
+# when a change of a setting reaches a running solver: from the next step (``Solver.reconfigure``),
+# or only with new particles and buffers (a new solver; the node's ~/reset)
+LIVE, RESET = "live", "reset"
 
-    dim: int = 3
-    dx: float = 0.02
-    hdx: float = 1.3  # h = hdx * dx; support 2h (thesis runs: 2.6 dx)
-    kernel: str = "cubic_spline"
-    viscosity: str = "artificial"
-    alpha: float = 0.1  # artificial viscosity coefficient (Monaghan 1992); DualSPHysics dam-break value
-    # alpha's multiplier between fluid and boundary particles (DualSPHysics' ViscoBoundFactor): the
-    # artificial viscosity of a fluid particle sliding past wall particles at rest is a wall friction
-    visco_bound_factor: float = 1.0
-    nu: float = 1.0e-6  # kinematic viscosity of water [m^2/s], laminar and SPS
-    sps_cs: float = 0.12  # Smagorinsky constant (thesis Eq. 2.20)
-    sps_ci: float = 6.6e-3  # isotropic SPS coefficient C_I (thesis Eq. 2.19)
-    boundary: str = "dynamic"
-    mdbc_slip: str = "none"  # mdbc.py: the boundary velocity under mDBC (DualSPHysics SlipMode)
-    mk_beta: float = 2.0  # fluid / boundary particle spacing ratio (thesis Eq. 2.26), >= 1
-    density_diffusion: str = "delta"
-    delta: float = 0.1  # delta-SPH coefficient (Molteni & Colagrossi 2009)
-    xsph: bool = False  # on in the thesis runs; off by default as in DualSPHysics
-    xsph_eps: float = 0.5  # thesis Eq. 2.22
-    # particle shifting (shifting.py, Lind et al. 2012); off by default, as in DualSPHysics
-    shifting: bool = False
-    shift_coef: float = -2.0  # A, DualSPHysics' ShiftCoef
-    shift_tfs: float = 0.0  # free-surface threshold of div r; 0 = DualSPHysics' 1.5 in 2D, 2.75 in 3D
-    shepard_every: int = 0  # steps between Shepard filters (thesis Eq. 2.28 used 40); 0 = off
-    rho0: float = 1000.0
-    gamma: float = 7.0
-    c0: float = 0.0  # sound speed [m/s]; 0 = c0_coef * sqrt(g * H)
-    c0_coef: float = 10.0
-    depth: float = 0.4  # reference depth H [m] for c0 and the wall forces
-    gravity: tuple = (0.0, 0.0, -9.81)
-    cfl: float = 0.4  # docs/defaults.md: 0.2-0.4 give the same answers on the impact cases
-    dt_fixed: float = 0.0  # > 0 forces this time step (tests, stability studies); at least MIN_DT_FIXED
-    # settling: until settle_until [s], velocities relax with time constant settle_tau [s], so a
-    # tank started at rest reaches its discrete equilibrium without bouncing on its walls
-    settle_tau: float = 0.0
-    settle_until: float = 0.0
-    precision: str = "float32"
-    device: str = field(default_factory=default_device)
-    cpu_threads: int = 0  # threads for the heavy passes on a CPU device; 0 = every core
-    max_particles: int = MAX_PARTICLES  # a scene whose spacing needs more is refused before any allocation
-    domain_lo: tuple = (0.0, 0.0, 0.0)
-    domain_hi: tuple = (1.0, 1.0, 1.0)
-    periodic: tuple = (False, False, False)
-    planes: list = field(default_factory=list)
-    rho_min_ratio: float = 0.8  # health check: density bounds as fractions of rho0
-    rho_max_ratio: float = 1.25
-    # failure detectors for what does not show as NaN (health.py, CHECKS):
-    # wall_penetration: a fluid particle deeper than penetration_ratio dx beyond a wall face (the
-    # first layer of wall particles sits dx/2 behind it) or inside a solid
-    penetration_ratio: float = 0.5
-    # clumping: more than clump_fraction of the fluid particles have a fluid neighbour closer than
-    # clump_ratio dx (tensile instability, pairing); clump_ratio 0 = off
-    clump_ratio: float = 0.25
-    clump_fraction: float = 0.2
-    # energy_growth: kinetic + potential + elastic energy of the fluid above its start by more than
-    # energy_growth_ratio x M g H (M the fluid's mass, H = depth); nothing feeds a closed tank; 0 = off
-    energy_growth_ratio: float = 0.05
-    # a fluid particle at fault (health.REASONS) is excluded and counted; the run fails once the
-    # excluded fluid passes this fraction of the fluid mass; 0 = a fault fails the run
-    max_excluded_fraction: float = 0.01
+
+def setting(default, doc: str, *, choices=None, lo=None, hi=None, applies=LIVE, node=False, factory=None):
+    """A configuration field and what everyone else needs to know of it, in one place: ``doc`` (its
+    meaning and units), ``choices`` or the range [lo, hi] that ``validate`` enforces, when a change
+    ``applies``, and whether the node declares it as a parameter (``ros/node_params.py`` generates
+    the declaration, its descriptor and its reset rule from this)."""
+    meta = {"doc": doc, "choices": choices, "lo": lo, "hi": hi, "applies": applies, "node": node}
+    if factory is not None:
+        return field(default_factory=factory, metadata=meta)
+    return field(default=default, metadata=meta)
+
+
+@dataclass
+class Domain:
+    """What the scene decides or the scene builder derives: never a run setting."""
+
+    dim: int = setting(3, "2 or 3", applies=RESET)
+    gravity: tuple = setting((0.0, 0.0, -9.81), "[m/s^2]", applies=RESET)
+    depth: float = setting(0.4, "reference depth H [m] for c0 and the wall forces", applies=RESET)
+    domain_lo: tuple = setting((0.0, 0.0, 0.0), "the domain's low corner [m]", applies=RESET)
+    domain_hi: tuple = setting((1.0, 1.0, 1.0), "the domain's high corner [m]", applies=RESET)
+    periodic: tuple = setting((False, False, False), "periodic axes", applies=RESET)
+    planes: list = setting(None, "particle-less walls (Plane)", applies=RESET, factory=list)
     # the tank's inside [wall_lo, wall_hi] (beyond +-1e30 where there is no wall: periodic axes, the
-    # open top) and the solid boxes (lo, hi) fluid must stay out of; set by the scene builder
-    wall_lo: tuple = (-1.0e30, -1.0e30, -1.0e30)
-    wall_hi: tuple = (1.0e30, 1.0e30, 1.0e30)
-    solids: list = field(default_factory=list)
+    # open top) and the solid boxes (lo, hi) fluid must stay out of
+    wall_lo: tuple = setting((-1.0e30, -1.0e30, -1.0e30), "the tank's inside, low corner [m]", applies=RESET)
+    wall_hi: tuple = setting((1.0e30, 1.0e30, 1.0e30), "the tank's inside, high corner [m]", applies=RESET)
+    solids: list = setting(None, "solid boxes (lo, hi) fluid must stay out of", applies=RESET, factory=list)
+
+
+@dataclass
+class HealthLimits:
+    """The failure detectors' limits (health.py, CHECKS): what does not show as NaN."""
+
+    rho_min_ratio: float = setting(0.8, "density_bounds: lowest fluid density, as a fraction of rho0")
+    rho_max_ratio: float = setting(1.25, "density_bounds: highest fluid density, as a fraction of rho0")
+    # the first layer of wall particles sits dx/2 behind a wall face
+    penetration_ratio: float = setting(0.5, "wall_penetration: how deep [dx] a fluid particle may go beyond a wall "
+                                            "face or into a solid")
+    clump_ratio: float = setting(0.25, "clumping: a fluid neighbour closer than this [dx] pairs a particle (tensile "
+                                       "instability); 0 = off")
+    clump_fraction: float = setting(0.2, "clumping: the share of the fluid that may be paired")
+    # nothing feeds a closed tank
+    energy_growth_ratio: float = setting(0.05, "energy_growth: the rise of the fluid's kinetic + potential + "
+                                               "elastic energy above its start allowed, in M g H; 0 = off")
+    max_excluded_fraction: float = setting(
+        0.01, "share of the fluid mass that may be excluded (a particle whose density, position or step is at "
+        "fault leaves the flow and is counted) before the run fails; 0 = the first fault fails it",
+        lo=0.0, hi=0.99, node=True)
+
+
+@dataclass
+class Numerics:
+    """The numerical choices of a run: the run settings a user sets (scene run section, run files,
+    ``--set``, node parameters)."""
+
+    dx: float = setting(0.02, "particle spacing [m]", lo=1.0e-4, hi=10.0, applies=RESET, node=True)
+    hdx: float = setting(1.3, "smoothing length over dx: h = hdx dx, support 2h (thesis runs: 2.6 dx)",
+                         applies=RESET)
+    kernel: str = setting("cubic_spline", "smoothing kernel (quadratic: thesis Eq. 2.5-2.8; cubic_spline: "
+                                          "Eq. 2.9-2.10; wendland: Wendland C2)", choices=KERNELS, node=True)
+    # the node offers laminar + a switch for SPS (ros/node_params.py)
+    viscosity: str = setting("artificial", "viscosity model: artificial (Monaghan 1992), laminar (thesis Eq. "
+                                           "2.16-2.17) or sps (laminar + Eq. 2.18-2.21)", choices=VISCOSITIES)
+    alpha: float = setting(0.1, "artificial viscosity coefficient (Monaghan 1992); DualSPHysics' dam-break value")
+    # the artificial viscosity of a fluid particle sliding past wall particles at rest is a wall friction
+    visco_bound_factor: float = setting(
+        1.0, "artificial viscosity between fluid and wall particles, as a multiple of alpha (DualSPHysics' "
+        "ViscoBoundFactor); it acts as a wall friction: 0 lets a surge run free", lo=0.0, hi=10.0, node=True)
+    nu: float = setting(1.0e-6, "kinematic viscosity [m^2/s], laminar and SPS")
+    sps_cs: float = setting(0.12, "Smagorinsky constant (thesis Eq. 2.20)")
+    sps_ci: float = setting(6.6e-3, "isotropic SPS coefficient C_I (thesis Eq. 2.19)")
+    boundary: str = setting("dynamic", "boundary particle model for walls the scene builds of particles: dynamic "
+                                       "(Crespo et al. 2007), mdbc (English et al. 2021), lennard_jones (thesis "
+                                       "Eq. 2.24), monaghan_kajtar (Eq. 2.26)", choices=BOUNDARIES,
+                            applies=RESET, node=True)
+    mdbc_slip: str = setting("none", "boundary velocity under mdbc: none (the wall's, zero), no_slip or free_slip "
+                                     "(DualSPHysics' SlipMode)", choices=MDBC_SLIPS, node=True)
+    mk_beta: float = setting(2.0, "fluid / boundary particle spacing ratio of Monaghan-Kajtar walls (thesis "
+                                  "Eq. 2.26), >= 1", applies=RESET)
+    density_diffusion: str = setting("delta", "density treatment: none, or delta-SPH (Molteni & Colagrossi 2009)",
+                                     choices=DENSITY_DIFFUSIONS, node=True)
+    delta: float = setting(0.1, "delta-SPH coefficient (Molteni & Colagrossi 2009)")
+    xsph: bool = setting(False, "XSPH (thesis Eq. 2.22): on in the thesis runs, off by default as in DualSPHysics")
+    xsph_eps: float = setting(0.5, "XSPH's epsilon (thesis Eq. 2.22)")
+    shifting: bool = setting(False, "particle shifting (Lind et al. 2012); off by default, as in DualSPHysics")
+    shift_coef: float = setting(-2.0, "shifting's A, DualSPHysics' ShiftCoef")
+    shift_tfs: float = setting(0.0, "free-surface threshold of div r; 0 = DualSPHysics' 1.5 in 2D, 2.75 in 3D")
+    shepard_every: int = setting(0, "steps between Shepard filters (thesis Eq. 2.28 used 40); 0 = off")
+    rho0: float = setting(1000.0, "reference density [kg/m^3]")
+    gamma: float = setting(7.0, "Tait exponent (thesis Eq. 2.12)")
+    c0: float = setting(0.0, "speed of sound [m/s]; 0 = c0_coef sqrt(g H) with the scene's depth H (thesis "
+                             "Section 2.3)", lo=0.0, hi=1000.0, node=True)
+    c0_coef: float = setting(10.0, "c0 / sqrt(g H) when c0 is 0")
+    cfl: float = setting(0.4, "Courant number of the adaptive time step (Monaghan 1992, as GPUSPH); docs/defaults.md: "
+                              "0.2-0.4 give the same answers on the impact cases", lo=MIN_CFL, hi=1.0, node=True)
+    dt_fixed: float = setting(0.0, "> 0 forces this time step [s] (tests, stability studies)")
+    # a tank started at rest reaches its discrete equilibrium without bouncing on its walls
+    settle_tau: float = setting(0.0, "settling: velocities relax with this time constant [s] until settle_until")
+    settle_until: float = setting(0.0, "settling ends at this time [s]")
+    precision: str = setting("float32", "floating-point precision of the solver state", choices=PRECISIONS,
+                             applies=RESET, node=True)
+    device: str = setting(None, "Warp device: cpu or cuda:N", applies=RESET, node=True, factory=default_device)
+    cpu_threads: int = setting(0, "threads for the heavy passes on a CPU device; 0 = every core", applies=RESET)
+    max_particles: int = setting(MAX_PARTICLES, "a scene whose spacing needs more particles is refused before "
+                                                "any allocation")
+
+
+def settings_of(part) -> tuple:
+    """The fields of a configuration part (Domain, HealthLimits, Numerics), in order."""
+    return tuple(dataclasses.fields(part))
+
+
+# the fields that only a new solver takes (Solver.reconfigure refuses them)
+RESET_FIELDS = tuple(f.name for part in (Domain, HealthLimits, Numerics) for f in settings_of(part)
+                     if f.metadata["applies"] == RESET)
+
+
+@dataclass
+class SolverConfig(Numerics, HealthLimits, Domain):
+    """Everything one solver runs with: the scene's domain, the health limits and the numerics.
+    Units are SI throughout."""
 
     # -- derived quantities -------------------------------------------------------------
     @property
@@ -174,6 +234,12 @@ class SolverConfig:
             if not ok or (value <= 0.0 if strict else value < 0.0):
                 raise ConfigError(name, value, "a finite number " + ("> 0" if strict else ">= 0"))
 
+        def within(name, lo, hi):
+            value = getattr(self, name)
+            ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+            if not ok or not lo <= value <= hi:
+                raise ConfigError(name, value, f"a number in [{lo:g}, {hi:g}]")
+
         def vector(name, length=3):
             value = getattr(self, name)
             try:
@@ -185,12 +251,11 @@ class SolverConfig:
 
         if self.dim not in (2, 3):
             raise ConfigError("dim", self.dim, "2 or 3")
-        choice("kernel", KERNELS)
-        choice("viscosity", VISCOSITIES)
-        choice("boundary", BOUNDARIES)
-        choice("mdbc_slip", MDBC_SLIPS)
-        choice("density_diffusion", DENSITY_DIFFUSIONS)
-        choice("precision", PRECISIONS)
+        for f in dataclasses.fields(self):
+            if f.metadata.get("choices"):
+                choice(f.name, f.metadata["choices"])
+            elif f.metadata.get("lo") is not None:
+                within(f.name, f.metadata["lo"], f.metadata["hi"])
         for name in ("dx", "hdx", "rho0", "gamma", "depth", "cfl", "c0_coef", "xsph_eps", "mk_beta"):
             positive(name)
         for name in ("alpha", "visco_bound_factor", "nu", "sps_cs", "sps_ci", "delta", "c0", "dt_fixed", "settle_tau",
@@ -198,17 +263,12 @@ class SolverConfig:
             positive(name, strict=False)
         if self.mk_beta < 1.0:
             raise ConfigError("mk_beta", self.mk_beta, "a number >= 1 (boundary particles no sparser than fluid)")
-        f = self.max_excluded_fraction
-        if isinstance(f, bool) or not isinstance(f, (int, float)) or not 0.0 <= f < 1.0:
-            raise ConfigError("max_excluded_fraction", f, "a fraction of the fluid mass in [0, 1) (0 = strict)")
         if isinstance(self.shift_coef, bool) or not isinstance(self.shift_coef, (int, float)) \
                 or not -10.0 <= self.shift_coef < 0.0:
             raise ConfigError("shift_coef", self.shift_coef, "a number in [-10, 0) (DualSPHysics uses -2)")
         if isinstance(self.shift_tfs, bool) or not isinstance(self.shift_tfs, (int, float)) \
                 or not 0.0 <= self.shift_tfs < self.dim:
             raise ConfigError("shift_tfs", self.shift_tfs, f"a number in [0, {self.dim}) (0 = 1.5 in 2D, 2.75 in 3D)")
-        if not MIN_CFL <= self.cfl <= 1.0:
-            raise ConfigError("cfl", self.cfl, f"a number in [{MIN_CFL:g}, 1]")
         if 0.0 < self.dt_fixed < MIN_DT_FIXED:
             raise ConfigError("dt_fixed", self.dt_fixed, f"0 (adaptive) or a step >= {MIN_DT_FIXED:g} s")
         m = self.max_particles

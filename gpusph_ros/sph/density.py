@@ -24,6 +24,12 @@ FLUID = state.FLUID
 BOUNDARY = state.BOUNDARY
 
 
+def params(cfg) -> dict:
+    """The Params field of the density treatment of ``cfg`` (a SolverConfig): delta h c0, 0 when
+    diffusion is off (the Shepard filter's period is the solver's)."""
+    return {"delta_hc0": cfg.delta * cfg.h * cfg.sound_speed if DENSITY_DIFFUSION_ID[cfg.density_diffusion] else 0.0}
+
+
 @functools.lru_cache(maxsize=None)
 def build(scalar):
     vec = wp.types.vector(3, scalar)

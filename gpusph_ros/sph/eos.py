@@ -15,6 +15,11 @@ import numpy as np
 import warp as wp
 
 
+def params(cfg) -> dict:
+    """The Params fields of the equation of state of ``cfg`` (a SolverConfig): rho0, B, gamma, c0."""
+    return {"rho0": cfg.rho0, "eos_b": cfg.eos_b, "gamma": cfg.gamma, "c0": cfg.sound_speed}
+
+
 @functools.lru_cache(maxsize=None)
 def build(scalar):
     @wp.func

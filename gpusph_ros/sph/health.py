@@ -84,6 +84,20 @@ class HealthError(RuntimeError):
                          f"particle {particle}{': ' + detail if detail else ''}")
 
 
+def params(cfg, fluid_mass: float, n_fluid: int) -> dict:
+    """The Params fields of the checks under ``cfg`` (a SolverConfig) for a fluid of ``fluid_mass``
+    in ``n_fluid`` particles: the density bounds, the tank's inside and the solids, the penetration
+    depth, clumping's distances and share, the energy slack (energy_growth_ratio M g H), the
+    displacement limit (0.9 x 2h, squared) and the exclusion limit."""
+    return {"rho_min": cfg.rho_min_ratio * cfg.rho0, "rho_max": cfg.rho_max_ratio * cfg.rho0,
+            "wall_lo": cfg.wall_lo, "wall_hi": cfg.wall_hi, "penetration": cfg.penetration_ratio * cfg.dx,
+            "n_solids": len(cfg.solids), "clump_r": cfg.clump_ratio * cfg.dx, "clump_wall": CLUMP_WALL_DX * cfg.dx,
+            "clump_fraction": cfg.clump_fraction, "n_fluid": max(1, n_fluid),
+            "energy_slack": cfg.energy_growth_ratio * fluid_mass * cfg.g_norm * cfg.depth,
+            "move_limit2": (0.9 * 2.0 * cfg.h) ** 2, "exclude": 1 if cfg.max_excluded_fraction > 0.0 else 0,
+            "excluded_limit": cfg.max_excluded_fraction * fluid_mass}
+
+
 @functools.lru_cache(maxsize=None)
 def build(scalar):
     vec = wp.types.vector(3, scalar)

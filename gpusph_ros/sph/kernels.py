@@ -41,6 +41,13 @@ def normalisation(kernel: str, dim: int, h: float) -> float:
     return _NORM[(kernel, dim)] / h ** dim
 
 
+def params(cfg) -> dict:
+    """The Params fields of the kernel of ``cfg`` (a SolverConfig): its id, a_D, h, 1/h and the
+    0.01 h^2 that regularises 1/r^2 in the viscous and diffusive terms."""
+    return {"kernel": KERNEL_ID[cfg.kernel], "norm": normalisation(cfg.kernel, cfg.dim, cfg.h), "h": cfg.h,
+            "inv_h": 1.0 / cfg.h, "eta2": 0.01 * cfg.h ** 2}
+
+
 @functools.lru_cache(maxsize=None)
 def build(scalar):
     """Kernel functions for one floating-point type (wp.float32 or wp.float64)."""

@@ -20,6 +20,13 @@ from types import SimpleNamespace
 import warp as wp
 
 
+def params(cfg) -> dict:
+    """The Params fields of shifting under ``cfg`` (a SolverConfig): A h (0 when off), the
+    free-surface threshold, and the largest shift of one step along an axis, 0.1 dx."""
+    return {"shift_a_h": cfg.shift_coef * cfg.h if cfg.shifting else 0.0, "shift_tfs": cfg.free_surface_threshold,
+            "shift_cap": 0.1 * cfg.dx}
+
+
 @functools.lru_cache(maxsize=None)
 def build(scalar):
     vec = wp.types.vector(3, scalar)

@@ -11,8 +11,8 @@ import math
 import numpy as np
 import warp as wp
 
-from . import boundaries, density, health, kernels, passes, viscosity
-from .config import SolverConfig, check_device
+from . import boundaries, density, eos, health, kernels, passes, shifting, viscosity, xsph
+from .config import RESET_FIELDS, SolverConfig, check_device
 from .health import HealthError
 from .launch import Launcher
 from .neighbours import NeighbourList, NeighbourOverflow, default_max_neighbours
@@ -64,59 +64,20 @@ class Solver:
 
     # -- set-up -------------------------------------------------------------------------
     def _make_params(self):
+        """The Params struct the passes read: each model module gives the fields of its model."""
         cfg = self.config
         p = self._passes.Params()
-        g = cfg.g_norm
-        p.dim = cfg.dim
-        p.kernel = kernels.KERNEL_ID[cfg.kernel]
-        p.norm = kernels.normalisation(cfg.kernel, cfg.dim, cfg.h)
-        p.h = cfg.h
-        p.inv_h = 1.0 / cfg.h
-        p.eta2 = 0.01 * cfg.h ** 2
-        p.viscosity = viscosity.VISCOSITY_ID[cfg.viscosity]
-        p.alpha = cfg.alpha
-        p.alpha_wall = cfg.alpha * cfg.visco_bound_factor
-        p.nu = cfg.nu
-        p.cs_dl2 = (cfg.sps_cs * cfg.dx) ** 2
-        p.ci_dl2 = cfg.sps_ci * cfg.dx ** 2
-        p.mdbc_slip = boundaries.mdbc.SLIP_ID[cfg.mdbc_slip]
-        for name, value in boundaries.params(cfg.boundary, g, cfg.depth, cfg.dx, cfg.mk_beta, cfg.dim).items():
-            setattr(p, name, value)
-        p.delta_hc0 = (cfg.delta * cfg.h * cfg.sound_speed
-                       if density.DENSITY_DIFFUSION_ID[cfg.density_diffusion] else 0.0)
-        p.xsph_eps = cfg.xsph_eps if cfg.xsph else 0.0
-        p.shift_a_h = cfg.shift_coef * cfg.h if cfg.shifting else 0.0
-        p.shift_tfs = cfg.free_surface_threshold
-        p.shift_cap = 0.1 * cfg.dx
-        p.rho0 = cfg.rho0
-        p.eos_b = cfg.eos_b
-        p.gamma = cfg.gamma
-        p.c0 = cfg.sound_speed
-        p.gravity = self.vec(*cfg.gravity)
-        p.lo = self.vec(*cfg.domain_lo)
-        p.hi = self.vec(*cfg.domain_hi)
-        p.periodic = wp.vec3i(*[1 if a else 0 for a in cfg.periodic])
-        p.rho_min = cfg.rho_min_ratio * cfg.rho0
-        p.rho_max = cfg.rho_max_ratio * cfg.rho0
-        p.cfl = cfg.cfl
-        p.dt_fixed = cfg.dt_fixed
-        p.settle_tau = cfg.settle_tau
-        p.settle_until = cfg.settle_until
-        p.n_planes = len(cfg.planes)
-        p.wall_lo = self.vec(*cfg.wall_lo)
-        p.wall_hi = self.vec(*cfg.wall_hi)
-        p.penetration = cfg.penetration_ratio * cfg.dx
-        p.n_solids = len(cfg.solids)
-        p.clump_r = cfg.clump_ratio * cfg.dx
-        p.clump_wall = health.CLUMP_WALL_DX * cfg.dx
-        p.clump_fraction = cfg.clump_fraction
-        p.n_fluid = max(1, self.n_fluid)
-        # the energy check's slack: a fraction of M g H
-        self._energy_slack = cfg.energy_growth_ratio * self._fluid_mass * cfg.g_norm * cfg.depth
-        p.energy_slack = self._energy_slack
-        p.move_limit2 = (0.9 * 2.0 * cfg.h) ** 2
-        p.exclude = 1 if cfg.max_excluded_fraction > 0.0 else 0
-        p.excluded_limit = cfg.max_excluded_fraction * self._fluid_mass
+        fields = {**passes.params(cfg), **kernels.params(cfg), **eos.params(cfg), **viscosity.params(cfg),
+                  **density.params(cfg), **xsph.params(cfg), **shifting.params(cfg), **boundaries.params(cfg),
+                  **health.params(cfg, self._fluid_mass, self.n_fluid)}
+        declared = self._passes.Params.vars
+        for name, value in fields.items():
+            kind = declared[name].type
+            setattr(p, name, kind(*value) if wp.types.type_is_vector(kind) else value)
+        missing = set(declared) - set(fields)
+        if missing:
+            raise RuntimeError(f"Params fields that no model module sets: {sorted(missing)}")
+        self._energy_slack = fields["energy_slack"]
         return p
 
     def _allocate(self, particles: Particles):
@@ -375,8 +336,7 @@ class Solver:
         return self.time
 
     # fields whose change needs new particles or new buffers: only a fresh Solver takes them
-    REBUILD_FIELDS = ("dim", "dx", "hdx", "boundary", "mk_beta", "precision", "device", "cpu_threads",
-                      "domain_lo", "domain_hi", "periodic", "planes", "wall_lo", "wall_hi", "solids")
+    REBUILD_FIELDS = RESET_FIELDS
 
     def reconfigure(self, **changes):
         """Change numerics that apply from the next step (cfl, dt_fixed, viscosity, ...)."""

@@ -11,6 +11,11 @@ from types import SimpleNamespace
 import warp as wp
 
 
+def params(cfg) -> dict:
+    """The Params field of XSPH under ``cfg`` (a SolverConfig): epsilon, 0 when XSPH is off."""
+    return {"xsph_eps": cfg.xsph_eps if cfg.xsph else 0.0}
+
+
 @functools.lru_cache(maxsize=None)
 def build(scalar):
     vec = wp.types.vector(3, scalar)

@@ -50,12 +50,19 @@ def wall_constants(g: float, depth: float, dx: float, mk_beta: float, dim: int) 
             **planes.constants(dx)}
 
 
-def params(name: str, g: float, depth: float, dx: float, mk_beta: float, dim: int) -> dict:
-    """The Params fields of a run whose particle walls are ``name``: its id, what the passes ask of
-    it, and the constants."""
+def model_params(name: str, g: float, depth: float, dx: float, mk_beta: float, dim: int) -> dict:
+    """The Params fields of particle walls of the model ``name``: its id, what the passes ask of it,
+    and the constants."""
     m = model(name)
     return {"boundary": BOUNDARY_ID[name], "wall_volume": int(m.volume), "wall_continuity": int(m.continuity),
             **wall_constants(g, depth, dx, mk_beta, dim)}
+
+
+def params(cfg) -> dict:
+    """The Params fields of the walls of ``cfg`` (a SolverConfig): the particle walls' model, mDBC's
+    slip mode and the number of planes."""
+    return {**model_params(cfg.boundary, cfg.g_norm, cfg.depth, cfg.dx, cfg.mk_beta, cfg.dim),
+            "mdbc_slip": mdbc.SLIP_ID[cfg.mdbc_slip], "n_planes": len(cfg.planes)}
 
 
 @functools.lru_cache(maxsize=None)
@@ -112,7 +119,7 @@ def repulsion(boundary: str, points, wall, g: float, depth: float, dx: float, hd
         raise ValueError(f"boundary: {boundary!r} is not a repulsive model")
     device = device or default_device()
     p = state.build(wp.float64).Params()
-    for name, value in params(boundary, g, depth, dx, mk_beta, dim).items():
+    for name, value in model_params(boundary, g, depth, dx, mk_beta, dim).items():
         setattr(p, name, value)
     p.inv_h = 1.0 / (hdx * dx)
     pts = wp.array(np.asarray(points, dtype=np.float64), dtype=wp.vec3d, device=device)
