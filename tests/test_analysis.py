@@ -1,6 +1,7 @@
 """The thesis's metrics (Section 4) on series with known answers."""
 import numpy as np
 import pytest
+import yaml
 
 from gpusph_ros.analysis import metrics as M
 from gpusph_ros.analysis.reference import gpusph_value, thesis_scenario
@@ -56,14 +57,15 @@ def test_gpusph_lookup_by_scenario_and_dx(reference_data):
     assert gpusph_value(reference_data, "dambreak1_peak_velocity.csv", "peak_velocity_m_s", 3, 0.025) is None
 
 
-def record_synthetic_bore(path):
-    """A recording of the dambreak2_015 scene's topics carrying a known bore (0.8 m/s from 4.45 s),
-    as a run at dx = 1 cm with the quadratic kernel and SPS (thesis scenario 1) would write it."""
+def record_synthetic_bore(path, scene=None):
+    """A recording of the dambreak2_015 scene's topics (or ``scene``'s, of the same probes) carrying
+    a known bore (0.8 m/s from 4.45 s), as a run at dx = 1 cm with the quadratic kernel and SPS
+    (thesis scenario 1) would write it."""
     from gpusph_ros.output.messages import clock, measurement_messages
     from gpusph_ros.output.recording import BagRecorder
     from gpusph_ros.scenes.schema import load_scene
 
-    scene = load_scene("dambreak2_015")
+    scene = scene or load_scene("dambreak2_015")
     heights = scene.probes[1].heights
     rec = BagRecorder(path, {"scene_name": scene.name, "scene": scene.text, "dx": 0.01,
                              "kernel": "quadratic", "viscosity": "sps", "run_config": "{dx: 0.01}"})
@@ -96,6 +98,46 @@ def test_dambreak2_report_from_a_recorded_synthetic_bore(tmp_path, reference_dat
     assert values["profile_A"]["value"] == pytest.approx(0.9 + heights[0], rel=0.01)
     assert values["profile_A"]["experiment"] == 0.94
     assert "normalised velocity at point F" in table(report)
+
+
+def test_a_users_scene_names_its_analysis_and_gets_the_same_comparison(tmp_path, reference_data):
+    """A scene file of the user's own (another name, the same flume and probes) that asks for the
+    DamBreak 2 analysis gets the experiment's column; without GPUSPH's (gpusph: false), and without
+    any comparison when it names none."""
+    from gpusph_ros.analysis.report import analyse
+    from gpusph_ros.scenes.schema import load_scene, parse_scene
+
+    text = load_scene("dambreak2_015").text.replace("name: dambreak2_015", "name: my_flume")
+    assert "name: my_flume" in text and "analysis: {case: dambreak2, gpusph: true}" in text
+    for section, gpusph in (("{case: dambreak2, gpusph: true}", 0.71), ("{case: dambreak2}", None)):
+        mine = text.replace("{case: dambreak2, gpusph: true}", section)
+        scene = parse_scene(yaml.safe_load(mine))
+        scene.text = mine
+        record_synthetic_bore(tmp_path / section, scene)
+        report, _ = analyse(tmp_path / section, reference_data)
+        values = {m["key"]: m for m in report["metrics"]}
+        assert report["scene"] == "my_flume"
+        assert values["mean_velocity"]["experiment"] == 0.772 and values["mean_velocity"]["gpusph"] == gpusph
+    mine = "\n".join(line for line in text.splitlines() if not line.startswith("analysis:"))
+    scene = parse_scene(yaml.safe_load(mine))
+    scene.text = mine
+    record_synthetic_bore(tmp_path / "none", scene)
+    assert analyse(tmp_path / "none", reference_data)[0]["metrics"] == []
+
+
+def test_every_analysis_a_scene_may_name_exists_and_a_bad_one_is_refused():
+    from gpusph_ros.analysis.report import ANALYSES as REGISTRY
+    from gpusph_ros.scenes.schema import ANALYSES, ConfigError, load_scene, parse_scene
+
+    assert set(ANALYSES) == set(REGISTRY)
+    data = yaml.safe_load(load_scene("lobovsky_2d").text)
+    for value, field, words in (({"case": "flume"}, "analysis.case", "dambreak1, dambreak2, lobovsky"),
+                                ({"case": "lobovsky", "gpusph": "yes"}, "analysis.gpusph", "true or false"),
+                                ({"gpusph": True}, "analysis.case", "required"),
+                                ("lobovsky", "analysis", "a mapping")):
+        with pytest.raises(ConfigError) as err:
+            parse_scene({**data, "analysis": value})
+        assert err.value.field == field and words in str(err.value), str(err.value)
 
 
 def test_first_impact_integral_of_a_known_pulse():

@@ -228,7 +228,7 @@ def test_bad_parameters_are_rejected_with_a_reason_and_change_nothing(client):
         ("device", "cuda:7", ["not available"]),
         ("scene", "no_such_scene", ["dambreak1_thesis", "collapse_2d"]),
         ("particle_fields", ["vx", "speed"], ["'speed'"]),
-        ("dx", 5.0, ["dx"]),
+        ("dx", 50.0, ["dx"]),
         ("cfl", 0, ["type"]),  # an integer where a double is declared
         ("autostart", False, ["read-only"]),
     ]:

@@ -16,6 +16,7 @@ series against the measured event; per water-level gauge the RMS error of the le
 the paper's units (p / (rho g H), h / H, t sqrt(g/H)), no time shift.
 """
 import json
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -117,18 +118,19 @@ def dambreak1(rec, meta, data, scenario, dx, same_case):
     return out, curves
 
 
-def dambreak2(rec, meta, data, scenario, dx, upper):
+def dambreak2(rec, meta, data, scenario, dx, upper, gpusph=True):
     out, curves = [], {}
+    gp = R.gpusph_value if gpusph else (lambda *a: None)
     t, u = _x(rec.topic("probes/bore"))
     arrival = M.bore_arrival(t, u)
     mean, covered = M.mean_behind(t, u, arrival)
     case = f"dambreak2_{int(round(upper * 100)):03d}"
     table = f"{case}_mean_velocity.csv"
-    out.append(_metric("bore_arrival", arrival, None, R.gpusph_value(data, f"{case}_bore_arrival.csv",
-                                                                     "arrival_time_s", scenario, dx, upper)))
+    out.append(_metric("bore_arrival", arrival, None,
+                       gp(data, f"{case}_bore_arrival.csv", "arrival_time_s", scenario, dx, upper)))
     note = "" if covered >= M.BORE_WINDOW - 0.15 else f"the record covers only {covered:.1f} s behind the bore"
     out.append(_metric("mean_velocity", mean, R.experiment_value(data, case, "mean_bore_velocity_6s_window"),
-                       R.gpusph_value(data, table, "mean_velocity_m_s", scenario, dx, upper), note=note))
+                       gp(data, table, "mean_velocity_m_s", scenario, dx, upper), note=note))
     profile = []
     k = 0
     while True:
@@ -139,7 +141,7 @@ def dambreak2(rec, meta, data, scenario, dx, upper):
         profile.append(M.mean_behind(tp, up, arrival)[0] / mean if mean else float("nan"))
         k += 1
     exp_p = R.experiment_profile(data) if case == "dambreak2_015" else None
-    gp_p = R.gpusph_profile(data, scenario, dx) if case == "dambreak2_015" else None
+    gp_p = R.gpusph_profile(data, scenario, dx) if case == "dambreak2_015" and gpusph else None
     for j, value in enumerate(profile):
         key = f"profile_{'ABCDEF'[j] if j < 6 else j}"
         e = float(exp_p[1][j]) if exp_p is not None and j < len(exp_p[1]) else None
@@ -199,9 +201,62 @@ def lobovsky(rec, scene, run, data):
     return out, {"lobovsky": curves}
 
 
-def analyse(path, data=None) -> dict:
-    """Metrics of the recording at ``path`` (a bag directory) as a JSON-ready dict, plus curves.
-    ``data``: the reference folder (default: the package's own, R.data_dir())."""
+@dataclass
+class Case:
+    """What an analysis reads: the recording, its metadata, the scene and run settings it records,
+    the reference folder, the thesis scenario its numerics match, the spacing, and whether the
+    thesis's GPUSPH results are of this scene."""
+
+    rec: object
+    meta: dict
+    scene: dict
+    run: dict
+    data: object
+    scenario: object
+    dx: float
+    gpusph: bool
+
+
+def _analyse_dambreak1(c: Case):
+    rows, curves = dambreak1(c.rec, c.meta, c.data, c.scenario, c.dx, same_case=c.gpusph)
+    # the thesis's probe is 0.146 m before the obstruction's face; PySPH reads it as before its centre
+    return rows, curves, {"gpusph_case": "DamBreak 1, 0.4 m column" if c.gpusph else None,
+                          "velocity_probe": (c.scene.get("probes") or {}).get("velocity", {}).get("position")}
+
+
+def _analyse_dambreak2(c: Case):
+    depth = float(c.scene.get("depth", 0.1))
+    rows, curves = dambreak2(c.rec, c.meta, c.data, c.scenario, c.dx, depth, gpusph=c.gpusph)
+    return rows, curves, {"gpusph_case": f"DamBreak 2, {c.scene.get('depth')} m" if c.gpusph else None}
+
+
+def _analyse_lobovsky(c: Case):
+    rows, curves = lobovsky(c.rec, c.scene, c.run, c.data)
+    return rows, curves, {}
+
+
+# each scene.analysis case (scenes/schema.py, ANALYSES): what its recordings are compared with
+ANALYSES = {"dambreak1": _analyse_dambreak1, "dambreak2": _analyse_dambreak2, "lobovsky": _analyse_lobovsky}
+# recordings made before scenes named their analysis: the built-in scenes' sections as shipped since
+_BEFORE_SCENES_NAMED_IT = {"dambreak1_thesis": {"case": "dambreak1", "gpusph": True},
+                           "dambreak1_lab": {"case": "dambreak1", "gpusph": False},
+                           "dambreak2_010": {"case": "dambreak2", "gpusph": True},
+                           "dambreak2_015": {"case": "dambreak2", "gpusph": True},
+                           "lobovsky_2d": {"case": "lobovsky", "gpusph": False}}
+
+
+def analysis_of(scene: dict, name: str) -> dict:
+    """The comparison a recording's scene asks for ({case, gpusph}), or {} for none."""
+    section = scene.get("analysis")
+    if isinstance(section, dict) and section.get("case") in ANALYSES:
+        return {"case": section["case"], "gpusph": bool(section.get("gpusph", False))}
+    return _BEFORE_SCENES_NAMED_IT.get(name, {}) if "analysis" not in scene else {}
+
+
+def analyse(path, data=None) -> tuple:
+    """(report, curves): the metrics of the recording at ``path`` (a bag directory) as a JSON-ready
+    dict, and the curves behind them; the comparison is the one the recorded scene names in its
+    ``analysis:`` section. ``data``: the reference folder (default: the package's own, R.data_dir())."""
     rec = read(path)
     meta = rec.metadata
     data = data or R.data_dir()
@@ -217,18 +272,15 @@ def analyse(path, data=None) -> dict:
               "complete": rec.complete, "reference_data": str(data) if data else None,
               "gpusph_scenario": scenario, "gpusph_scenario_exact": exact,
               "covers_until": max(rec.clock) if rec.clock else 0.0}
-    if name.startswith("dambreak1"):
-        rows, curves = dambreak1(rec, meta, data, scenario, dx, same_case=(name == "dambreak1_thesis"))
-        report["gpusph_case"] = "DamBreak 1, 0.4 m column" if name == "dambreak1_thesis" else None
-        # the thesis's probe is 0.146 m before the obstruction's face; PySPH reads it as before its centre
-        report["velocity_probe"] = (scene.get("probes") or {}).get("velocity", {}).get("position")
-    elif name.startswith("dambreak2"):
-        rows, curves = dambreak2(rec, meta, data, scenario, dx, float(scene.get("depth", 0.1)))
-        report["gpusph_case"] = f"DamBreak 2, {scene.get('depth')} m"
-    elif name.startswith("lobovsky"):
-        rows, curves = lobovsky(rec, scene, run, data)
-    else:
-        rows, curves = [], {}
+    case = analysis_of(scene, name)
+    rows, curves = [], {}
+    if case:
+        try:
+            rows, curves, extra = ANALYSES[case["case"]](Case(rec, meta, scene, run, data, scenario, dx,
+                                                               case["gpusph"]))
+        except KeyError as err:  # a probe the comparison reads is not in the scene
+            raise KeyError(f"analysis {case['case']} (the scene's analysis section): {err.args[0]}") from None
+        report.update(extra)
     report["metrics"] = rows
     return report, curves
 

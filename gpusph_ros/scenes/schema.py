@@ -23,7 +23,10 @@ from .boxes import WALL_KINDS, wall_faces
 
 PROBE_TYPES = ("point", "column", "profile", "gauge", "pressure_sensor")
 SCENE_KEYS = ("name", "description", "source", "dim", "tank", "headroom", "gravity", "depth", "periodic",
-              "walls", "fluid", "wet_bed", "obstacles", "probes", "run")
+              "walls", "fluid", "wet_bed", "obstacles", "probes", "run", "analysis")
+# the comparisons a scene may ask its recordings to get (``analysis: {case: ..., gpusph: ...}``), by the
+# measurements they compare with; analysis/report.py holds one analysis for each
+ANALYSES = ("dambreak1", "dambreak2", "lobovsky")
 
 
 @dataclass
@@ -81,6 +84,9 @@ class Scene:
     obstacles: list = field(default_factory=list)
     probes: list = field(default_factory=list)
     run_settings: dict = field(default_factory=dict)  # the file's `run:` section (settings.py)
+    # the file's `analysis:` section: which comparison its recordings get (ANALYSES), and whether the
+    # thesis's GPUSPH tables are of this very geometry; empty: none
+    analysis: dict = field(default_factory=dict)
     text: str = ""  # the file as written, recorded with each run
     # where the tank's corner lies in the world: (0, 0, 0) but for a cropped scene (reduce.py),
     # whose boxes and probes are given from its own corner
@@ -319,4 +325,18 @@ def parse_scene(data, default_name: str = "scene") -> Scene:
     return Scene(name=name, dim=dim, tank=tank, gravity=gravity, depth=depth, fluid=fluid,
                  description=str(data.get("description", "")).strip(), source=str(data.get("source", "")).strip(),
                  headroom=headroom, periodic=periodic, walls=walls, wet_bed=wet_bed, obstacles=obstacles,
-                 probes=probes, run_settings=dict(run))
+                 probes=probes, run_settings=dict(run), analysis=_analysis(data.get("analysis")))
+
+
+def _analysis(value) -> dict:
+    """The ``analysis:`` section: {case: one of ANALYSES, gpusph: true when the thesis's GPUSPH
+    results are of this geometry (default false)}."""
+    if value is None:
+        return {}
+    value = _mapping("analysis", value, ("case", "gpusph"), required=("case",))
+    if value["case"] not in ANALYSES:
+        raise ConfigError("analysis.case", value["case"], "one of " + ", ".join(ANALYSES))
+    gpusph = value.get("gpusph", False)
+    if not isinstance(gpusph, bool):
+        raise ConfigError("analysis.gpusph", gpusph, "true or false (the thesis's GPUSPH results are of this scene)")
+    return {"case": value["case"], "gpusph": gpusph}
