@@ -137,3 +137,30 @@ def test_gpusph_run_refuses_an_output_folder_it_cannot_write_before_building(tmp
     assert code == 1
     for word in words:
         assert word in err.getvalue(), err.getvalue()
+
+
+@pytest.mark.parametrize("contents, named", [
+    (f"password: {SECRET}\n", "password"),  # a key file's mapping: the key is named, its value is the secret
+    (f"root:{SECRET}:20228:0:99999:7:::\ndaemon:*:20228:0:99999:7:::\n", None),  # a shadow file: the key is
+])
+def test_no_entry_point_quotes_a_file_that_is_no_scene_run_or_study(tmp_path, contents, named):
+    """gpusph-run (scene and run configuration), gpusph-plan and gpusph-sweep refuse a file whose
+    YAML is a mapping of keys no scene, run configuration or study has, in one line, exit 1, and
+    repeat none of its values, nor a key that does not read as a field name."""
+    from gpusph_ros.cli import plan_main, sweep_main
+
+    path = tmp_path / "private.yaml"
+    path.write_text(contents)
+    calls = [(run_main, [str(path), "--out", str(tmp_path / "a")]),
+             (run_main, ["collapse_2d", "--run-config", str(path), "--out", str(tmp_path / "b")]),
+             (plan_main, [str(path)]), (plan_main, ["collapse_2d", "--run-config", str(path)]),
+             (sweep_main, [str(path), "--out", str(tmp_path / "c")])]
+    for main, argv in calls:
+        err = io.StringIO()
+        with redirect_stderr(err):
+            assert main(argv) == 1, (main.__name__, argv)
+        message = err.getvalue().strip()
+        assert len(message.splitlines()) == 1 and "not allowed" in message, (main.__name__, message)
+        assert SECRET not in message, (main.__name__, message)
+        if named:
+            assert f": {named}: not allowed" in message, message

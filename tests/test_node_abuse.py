@@ -110,6 +110,11 @@ def test_bad_scene_files_are_refused_at_once_and_leak_nothing(node, tmp_path):
         assert not result.successful, name
         assert result.reason.startswith("scene:") and str(path) in result.reason, (name, result.reason)
         assert SECRET not in result.reason
+    for name, text in (("key_file", f"password: {SECRET}\n"), ("shadow", f"root:{SECRET}:20228:0:99999:7:::\n")):
+        path = tmp_path / f"{name}.yaml"
+        path.write_text(text)
+        result, = timed(node.client.set, scene=str(path))
+        assert not result.successful and "not allowed" in result.reason and SECRET not in result.reason, result
     assert node.client.get("scene") == {"scene": "dambreak1_thesis"}
     assert node.alive()
 
@@ -253,6 +258,47 @@ def test_a_node_on_a_bad_scene_stays_up_and_refuses_everything_after_shutdown(tm
             assert not reply.success and "shut down" in reply.message, (name, reply.message)
         assert node.status(lambda s: s["state"] == "shut down")["level"] == DiagnosticStatus.WARN
         assert node.proc.poll() is None
+    finally:
+        node.close()
+
+
+def test_every_lifecycle_transition_not_allowed_from_a_state_is_refused_and_the_node_stays_up(tmp_path):
+    """From each primary state (reached by the allowed transitions), every transition the state does
+    not allow is answered with success false and changes nothing; rclpy's own service raised
+    RCLError ("Transition is not registered") and the process ended."""
+    from lifecycle_msgs.msg import State, Transition
+    from lifecycle_msgs.srv import ChangeState, GetState
+
+    every = {Transition.TRANSITION_CONFIGURE, Transition.TRANSITION_CLEANUP, Transition.TRANSITION_ACTIVATE,
+             Transition.TRANSITION_DEACTIVATE, Transition.TRANSITION_UNCONFIGURED_SHUTDOWN,
+             Transition.TRANSITION_INACTIVE_SHUTDOWN, Transition.TRANSITION_ACTIVE_SHUTDOWN}
+    allowed = {State.PRIMARY_STATE_UNCONFIGURED: {Transition.TRANSITION_CONFIGURE,
+                                                  Transition.TRANSITION_UNCONFIGURED_SHUTDOWN},
+               State.PRIMARY_STATE_INACTIVE: {Transition.TRANSITION_CLEANUP, Transition.TRANSITION_ACTIVATE,
+                                              Transition.TRANSITION_INACTIVE_SHUTDOWN},
+               State.PRIMARY_STATE_ACTIVE: {Transition.TRANSITION_DEACTIVATE, Transition.TRANSITION_ACTIVE_SHUTDOWN},
+               State.PRIMARY_STATE_FINALIZED: set()}
+    # the way through the states: each step an allowed transition
+    path = [(State.PRIMARY_STATE_UNCONFIGURED, Transition.TRANSITION_CONFIGURE),
+            (State.PRIMARY_STATE_INACTIVE, Transition.TRANSITION_ACTIVATE),
+            (State.PRIMARY_STATE_ACTIVE, Transition.TRANSITION_ACTIVE_SHUTDOWN),
+            (State.PRIMARY_STATE_FINALIZED, None)]
+    node = Node(tmp_path, BASE_DOMAIN + 1, "autostart:=false")
+    try:
+        client = node.client
+        for state, onward in path:
+            assert client.call("get_state", GetState, timeout=120.0).current_state.id == state
+            for transition in sorted(every - allowed[state]):
+                reply = timed(client.call, "change_state", ChangeState, transition=Transition(id=transition))
+                assert not reply.success, (state, transition)
+                assert client.call("get_state", GetState).current_state.id == state, (state, transition)
+            reply = timed(client.call, "change_state", ChangeState, transition=Transition(label="no_such"))
+            assert not reply.success
+            assert node.alive(), node.log.read_text()[-3000:]
+            if onward is not None:
+                assert client.call("change_state", ChangeState, timeout=120.0,
+                                   transition=Transition(id=onward)).success, (state, onward)
+        assert "not allowed from state 'finalized'" in node.log.read_text()
     finally:
         node.close()
 

@@ -226,6 +226,27 @@ class SimNode(LifecycleNode):
             return f"; not recording: cannot write under {directory} ({err.strerror or err})"
 
     # -- lifecycle -----------------------------------------------------------------------------
+    def _LifecycleNodeMixin__on_change_state(self, request, response):
+        """The ~/change_state service. rclpy's own raises RCLError on a transition the current state
+        does not allow (configure while active, anything after shut-down), and the error ends the
+        process; here such a request is refused (success false) with the reason logged, and so is
+        any error of the transition itself. (rclpy binds the service to this name at start-up.)"""
+        state = self._state_machine.current_state[1]
+        allowed = {(t[0], t[1]) for t in self._state_machine.available_transitions}
+        wanted = request.transition.label or request.transition.id
+        if not any(wanted in pair for pair in allowed):
+            names = ", ".join(sorted(label for _, label in allowed)) or "none"
+            self.get_logger().warning(f"transition {wanted!r} refused: not allowed from state {state!r} "
+                                      f"(allowed: {names})")
+            response.success = False
+            return response
+        try:
+            return super()._LifecycleNodeMixin__on_change_state(request, response)
+        except Exception as err:  # whatever a transition raises, the node stays up
+            self._internal(f"transition {wanted!r} from {state!r}", err)
+            response.success = False
+            return response
+
     @_transition
     def on_configure(self, state) -> TransitionCallbackReturn:
         reason = node_params.check(self.values())

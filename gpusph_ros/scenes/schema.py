@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..share import config_dir
-from ..sph.config import ConfigError
+from ..sph.config import ConfigError, unknown_key
 from . import yaml_input
 from .boxes import WALL_KINDS, wall_faces
 
@@ -151,13 +151,12 @@ def _pad3(vec):
     return tuple(vec) + (0.0,) * (3 - len(vec))
 
 
-def _mapping(where, value, keys, required=()):
+def _mapping(where, value, keys, required=(), whole="scene"):
     if not isinstance(value, dict):
         raise ConfigError(where, value, "a mapping with keys " + ", ".join(keys))
     for key in value:
         if key not in keys:
-            raise ConfigError(f"{where}.{key}" if where else str(key), value[key],
-                              "no such field; the fields are " + ", ".join(keys))
+            raise unknown_key(where, key, keys, whole)
     for key in required:
         if key not in value:
             raise ConfigError(f"{where}.{key}" if where else key, None, "a value (this field is required)")

@@ -11,7 +11,7 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
-from ..sph.config import ConfigError, Domain, HealthLimits, Numerics, SolverConfig, settings_of
+from ..sph.config import ConfigError, Domain, HealthLimits, Numerics, SolverConfig, settings_of, unknown_key
 from . import yaml_input
 from .reduce import Reduction, apply
 from .schema import Scene, read_yaml, shipped
@@ -108,9 +108,11 @@ def resolve(scene: Scene, files=(), sets=(), **overrides) -> RunConfig:
     merged = {}
     for layer in layers:
         for key, value in layer.items():
+            if key in SCENE_FIELDS:
+                raise ConfigError(key, value, "a run setting (this one is set by the scene); the settings are "
+                                  + ", ".join(RUN_KEYS))
             if key not in RUN_KEYS:
-                hint = " (set by the scene)" if key in SCENE_FIELDS else ""
-                raise ConfigError(key, value, "a run setting" + hint + "; the settings are " + ", ".join(RUN_KEYS))
+                raise unknown_key("", key, RUN_KEYS, "run_config")
             merged[key] = _coerce(key, value)
     output = Output(**{k: merged.pop(k) for k in OUTPUT_FIELDS if k in merged})
     if not (math.isfinite(output.end_time) and output.end_time > 0.0):

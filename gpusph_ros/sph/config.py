@@ -40,11 +40,25 @@ def shown(value) -> str:
 class ConfigError(ValueError):
     """A configuration field has a value the solver cannot use."""
 
-    def __init__(self, field_name: str, value, allowed: str):
+    def __init__(self, field_name: str, value, allowed: str, quote: bool = True):
         self.field = field_name
         self.value = value
         self.allowed = allowed
-        super().__init__(f"{field_name}: {shown(value)} is not allowed; expected {allowed}")
+        # quote=False: the value came from a file that may not be meant for us (a key no scene has:
+        # the file may be anything a path names), so it is not repeated
+        what = f"{shown(value)} is not allowed" if quote else "not allowed"
+        super().__init__(f"{field_name}: {what}; expected {allowed}")
+
+
+def unknown_key(where: str, key, keys, whole: str) -> ConfigError:
+    """The refusal of a key that is no field of ``keys`` (in the mapping at ``where``, of the file
+    called ``whole``): named when it reads as a field name, and neither the value nor any other
+    key quoted, since the file may be any file a path names (a key file, a password file)."""
+    if isinstance(key, str) and key.isidentifier() and len(key) <= 64:
+        return ConfigError(f"{where}.{key}" if where else key, None,
+                           "a known field; the fields are " + ", ".join(keys), quote=False)
+    return ConfigError(where or whole, None, "keys that are field names (this file may be no "
+                       f"{whole} file); the fields are " + ", ".join(keys), quote=False)
 
 
 def check_device(device):

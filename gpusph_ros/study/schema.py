@@ -68,7 +68,7 @@ def study_names() -> list:
 def load_study(name_or_path) -> Study:
     """A study from a shipped name (config/studies) or a YAML path; every case is checked."""
     path, _, data = read_yaml("studies", name_or_path, "study", "study")
-    item = _mapping("", data, KEYS, required=("scenes", "scenarios", "metrics"))
+    item = _mapping("", data, KEYS, required=("scenes", "scenarios", "metrics"), whole="study")
     scenes = item["scenes"]
     if not isinstance(scenes, list) or not scenes:
         raise ConfigError("scenes", scenes, "a list of scene names or paths")
