@@ -38,6 +38,17 @@ def _progress(run, stream=sys.stdout):
         stream.flush()
 
 
+def _at_least_one(text: str) -> int:
+    """An argparse type: a whole number >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{value} is not allowed; expected a whole number >= 1")
+    return value
+
+
 def run_main(argv=None):
     parser = argparse.ArgumentParser(prog="gpusph-run", description="Run a scene headless and record it to MCAP.")
     parser.add_argument("scene", help="built-in scene name or path to a scene YAML file")
@@ -104,15 +115,20 @@ def analyze_main(argv=None):
 
     if (Path(args.recording) / "results.csv").is_file():
         return _analyze_study(Path(args.recording))
+    recording = Path(args.recording)
     try:
-        rep, curves = R.analyse(args.recording, Path(args.reference) if args.reference else None)
-    except (FileNotFoundError, KeyError) as err:
+        rep, curves = R.analyse(recording, Path(args.reference) if args.reference else None)
+    except (OSError, KeyError, ValueError) as err:
         print(f"gpusph-analyze: {err}", file=sys.stderr)
         return 1
     print(R.table(rep))
-    out = Path(args.charts) if args.charts else Path(args.recording) / "analysis"
-    path = R.write(rep, out)
-    written = [] if args.no_charts else R.charts(rep, curves, out)
+    out = Path(args.charts) if args.charts else (recording if recording.is_dir() else recording.parent) / "analysis"
+    try:
+        path = R.write(rep, out)
+        written = [] if args.no_charts else R.charts(rep, curves, out)
+    except OSError as err:
+        print(f"gpusph-analyze: --charts: {out} cannot be written: {err.strerror or err}", file=sys.stderr)
+        return 1
     print(f"\nmetrics: {path}" + ("".join(f"\nchart: {w}" for w in written)))
     if not rep["complete"]:
         print("note: the recording ends mid-file (a killed run); metrics cover what it holds")
@@ -176,10 +192,19 @@ def sweep_main(argv=None):
         return 1
     if args.out:
         study = with_out(study, args.out)
-    study.out.mkdir(parents=True, exist_ok=True)
-    (study.out / "study.json").write_text(json.dumps({"name": study.name, "metrics": study.metrics,
-                                                      "cases": [c.name for c in study.cases()]}, indent=1))
-    rows = sweep(study, scheduler=args.scheduler, progress=lambda line: print(line, flush=True))
+    try:
+        study.out.mkdir(parents=True, exist_ok=True)
+        (study.out / "study.json").write_text(json.dumps({"name": study.name, "metrics": study.metrics,
+                                                          "cases": [c.name for c in study.cases()]}, indent=1))
+    except OSError as err:
+        print(f"gpusph-sweep: --out: {study.out} cannot be written: {err.strerror or err}", file=sys.stderr)
+        return 1
+    try:
+        rows = sweep(study, scheduler=args.scheduler, progress=lambda line: print(line, flush=True))
+    except (OSError, ValueError, TimeoutError) as err:  # a scheduler address that is none, or none answers
+        print(f"gpusph-sweep: --scheduler: {args.scheduler!r}: {err}" if args.scheduler else f"gpusph-sweep: {err}",
+              file=sys.stderr)
+        return 1
     (study.out / "results.md").write_text(table.markdown(rows, study.metrics))
     written = table.write(rows, study.out) + [study.out / "results.md"] + charts.write(
         rows, study.metrics, study.out / "charts", data_dir())
@@ -195,7 +220,8 @@ def plan_main(argv=None):
     parser.add_argument("scene", help="built-in scene name or path to a scene YAML file")
     parser.add_argument("--run-config", action="append", default=[], metavar="NAME|FILE")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
-    parser.add_argument("--calibration-steps", type=int, default=30)
+    parser.add_argument("--calibration-steps", type=_at_least_one, default=30,
+                        help="steps timed on the device to estimate the step rate (>= 1)")
     parser.add_argument("--no-reductions", action="store_true",
                         help="price only the run as configured, not each scene reduction that applies")
     args = parser.parse_args(argv)

@@ -150,6 +150,8 @@ class Run:
                     progress(self)
         except (HealthError, NeighbourOverflow) as err:
             status = f"failed: {err}"
+        except RuntimeError as err:  # e.g. time stuck: a step below what float64 adds to the clock
+            status = f"failed: {err}"
         except KeyboardInterrupt:
             status = "interrupted"
         result = self.result(status)

@@ -49,6 +49,10 @@ def test_good_scene_parses_into_three_vectors():
     (("tank",), [1.0, -0.5, 0.4], "tank[1]", ">= 0"),
     (("tank",), [1.0, 0.5], "tank", "a list of 3 numbers"),
     (("gravity",), [0.0, 0.0, 9.81], "gravity", "pointing down"),
+    (("gravity",), [0.0, 0.0, -1.0e30], "gravity", "a magnitude in [0.0981, 981]"),  # time stuck at 0
+    (("gravity",), [0.0, 0.0, -1.0e-30], "gravity", "a magnitude in [0.0981, 981]"),
+    (("depth",), 1.0e6, "depth", "<= 0.4"),  # deeper than the tank: c0 took millions of steps a second
+    (("analysis",), {"case": "flume"}, "analysis.case", "one of dambreak1, dambreak2, lobovsky"),
     (("walls", "floor"), "glass", "walls.floor", "one of particles, planes"),
     (("walls", "z_max"), "planes", "walls.z_max", "the fields are x_min, x_max, y_min, y_max, floor"),
     (("fluid", 0, "hi"), [0.3, 0.5, 0.6], "fluid[0].hi", "inside the tank"),
@@ -112,8 +116,11 @@ def test_run_settings_layer_scene_then_files_then_sets(tmp_path):
     ("xsph=1", "xsph", "true or false"),
     ("gravity=[0,0,-1]", "gravity", "set by the scene"),
     ("colour=red", "colour", "the settings are"),
-    ("end_time=-1", "end_time", "a time > 0"),
-    ("particle_rate=500", "particle_rate", "to output_rate (100 Hz)"),
+    ("end_time=-1", "end_time", "a time in [1e-06, 100000] s"),
+    ("end_time=1e30", "end_time", "a time in [1e-06, 100000] s"),  # it ran until killed
+    ("output_rate=5e-324", "output_rate", "a rate in [0.001, 10000] Hz"),  # a denormal was accepted
+    ("particle_rate=500", "particle_rate", "output_rate = 100] Hz"),
+    ("particle_rate=1e-300", "particle_rate", "0 (no particle clouds) or a rate in [0.001"),
     ("cfl=2", "cfl", "[0.01, 1]"),
 ])
 def test_bad_run_setting_is_named(setting, field, allowed):

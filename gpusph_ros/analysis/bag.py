@@ -5,6 +5,7 @@ yields every message up to its last complete chunk. Particle clouds are kept as 
 decoded on request.
 """
 import importlib
+import struct
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -94,7 +95,10 @@ def read(path) -> Recording:
                     else:
                         msg = deserialize_message(record.data, _message_class(type_name))
                         rows.setdefault(topic, []).append((t, _values(msg)))
-        except (McapError, EOFError, ValueError, KeyError, IndexError) as err:
+        except (McapError, EOFError, ValueError, KeyError, IndexError, struct.error) as err:
+            if not schemas and not rec.metadata:  # nothing of a recording before the error
+                raise ValueError(f"{path}: not a recording made by gpusph-run or sim_node (no MCAP records: "
+                                 f"{type(err).__name__})") from None
             rec.complete = False
             rec.metadata.setdefault("read_error", f"the file ends mid-record ({type(err).__name__}): a killed run")
     for key in ("run_config", "versions", "bodies"):

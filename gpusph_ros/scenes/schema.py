@@ -24,6 +24,8 @@ from .boxes import WALL_KINDS, wall_faces
 PROBE_TYPES = ("point", "column", "profile", "gauge", "pressure_sensor")
 SCENE_KEYS = ("name", "description", "source", "dim", "tank", "headroom", "gravity", "depth", "periodic",
               "walls", "fluid", "wet_bed", "obstacles", "probes", "run", "analysis")
+# gravity's magnitude [m/s^2]: from a hundredth of the Earth's to a centrifuge model's hundred g
+MIN_GRAVITY, MAX_GRAVITY = 0.0981, 981.0
 # the comparisons a scene may ask its recordings to get (``analysis: {case: ..., gpusph: ...}``), by the
 # measurements they compare with; analysis/report.py holds one analysis for each
 ANALYSES = ("dambreak1", "dambreak2", "lobovsky")
@@ -292,6 +294,9 @@ def parse_scene(data, default_name: str = "scene") -> Scene:
     if gravity[up] >= 0.0 or any(gravity[ax] != 0.0 for ax in range(dim) if ax != up):
         raise ConfigError("gravity", list(gravity[:dim]),
                           f"a vector pointing down the vertical axis ({'xyz'[up]}), e.g. {default_g}")
+    if not MIN_GRAVITY <= -gravity[up] <= MAX_GRAVITY:
+        raise ConfigError("gravity", list(gravity[:dim]), f"a magnitude in [{MIN_GRAVITY:g}, {MAX_GRAVITY:g}] m/s^2 "
+                                                          "(it sets the sound speed and so the time step)")
     headroom = _number("headroom", data.get("headroom", 0.5), lo=0.0)
     periodic = data.get("periodic", [False] * dim)
     if (not isinstance(periodic, list) or len(periodic) != dim
@@ -310,7 +315,9 @@ def parse_scene(data, default_name: str = "scene") -> Scene:
         fluid.append(Box(name, lo, hi))
     _unique("fluid", [b.name for b in fluid])
     surface = max(b.hi[up] for b in fluid)
-    depth = _number("depth", data.get("depth", surface), lo=0.0, lo_open=True)
+    # the reference depth H sets c0 = c0_coef sqrt(g H) and the wall forces: a fluid deeper than the
+    # tank is no tank's, and its sound speed would take millions of steps a second
+    depth = _number("depth", data.get("depth", surface), lo=0.0, hi=tank[up], lo_open=True)
     wet_bed = _number("wet_bed", data.get("wet_bed", 0.0), lo=0.0, hi=tank[up])
 
     obstacles = _obstacles(data.get("obstacles") or [], tank, dim)

@@ -50,15 +50,15 @@ class ConfigError(ValueError):
         super().__init__(f"{field_name}: {what}; expected {allowed}")
 
 
-def unknown_key(where: str, key, keys, whole: str) -> ConfigError:
+def unknown_key(where: str, key, keys, whole: str, noun: str = "fields") -> ConfigError:
     """The refusal of a key that is no field of ``keys`` (in the mapping at ``where``, of the file
     called ``whole``): named when it reads as a field name, and neither the value nor any other
     key quoted, since the file may be any file a path names (a key file, a password file)."""
     if isinstance(key, str) and key.isidentifier() and len(key) <= 64:
         return ConfigError(f"{where}.{key}" if where else key, None,
-                           "a known field; the fields are " + ", ".join(keys), quote=False)
+                           f"a known name; the {noun} are " + ", ".join(keys), quote=False)
     return ConfigError(where or whole, None, "keys that are field names (this file may be no "
-                       f"{whole} file); the fields are " + ", ".join(keys), quote=False)
+                       f"{whole} file); the {noun} are " + ", ".join(keys), quote=False)
 
 
 def check_device(device):
