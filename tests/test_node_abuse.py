@@ -256,6 +256,9 @@ def test_a_node_on_a_bad_scene_stays_up_and_refuses_everything_after_shutdown(tm
                                   ("record", SetBool, {"data": True})):
             reply = timed(client.call, name, srv, **fields)
             assert not reply.success and "shut down" in reply.message, (name, reply.message)
+        for change in ({"dx": 0.05}, {"record_dir": str(tmp_path)}, {"cfl": 0.2}):  # were accepted
+            result, = timed(client.set, **change)
+            assert not result.successful and "shut down" in result.reason, (change, result.reason)
         assert node.status(lambda s: s["state"] == "shut down")["level"] == DiagnosticStatus.WARN
         assert node.proc.poll() is None
     finally:

@@ -58,6 +58,14 @@ def test_good_scene_parses_into_three_vectors():
     (("fluid", 0, "hi"), [0.3, 0.5, 0.6], "fluid[0].hi", "inside the tank"),
     (("fluid", 0, "hi"), [0.0, 0.5, 0.2], "fluid[0].hi", "every component above lo"),
     (("fluid", 0, "name"), "2nd", "fluid[0].name", "starting with a letter"),
+    (("fluid",), [{"name": "a", "lo": [0, 0, 0], "hi": [0.3, 0.5, 0.2]}, {"name": "b", "lo": [0, 0, 0],
+                                                                         "hi": [0.3, 0.5, 0.2]}],
+     "fluid[1]", "overlaps 'a'"),  # two identical boxes were accepted: 16 particles a cell
+    (("headroom",), 1.0e6, "headroom", "<= 10"),
+    (("probes", "col", "radius_dx"), 1.0e9, "probes.col.radius_dx", "<= 100"),
+    (("description",), {"a": 1}, "description", "a text"),
+    (("fluid", 0, "name"), "w\u00e4sser", "fluid[0].name", "ASCII letters"),  # the node's reset failed on it
+    (("fluid", 0, "name"), "a" * 65, "fluid[0].name", "at most 64"),
     (("fluid",), [], "fluid", "at least one box"),
     (("fluid", 0, "lo"), KeyError, "fluid[0].lo", "required"),
     (("wet_bed",), -0.1, "wet_bed", ">= 0"),

@@ -104,8 +104,15 @@ def _device_names() -> list:
     return [d.alias for d in wp.get_devices()]
 
 
+# the longest text a parameter takes: a path (Linux's PATH_MAX), a frame id (tf2's frames are short
+# names; a 10^6-character one was written into every message, 590 MB of recording in 6 s)
+MAX_TEXT = {"scene": 4096, "record_dir": 4096, "frame_id": 256}
+
+
 def _check_one(p: Param, value):
     """The reason ``value`` is not allowed for ``p``, or None."""
+    if p.name in MAX_TEXT and len(value) > MAX_TEXT[p.name]:
+        return f"{p.name}: a text of {len(value):,} characters; at most {MAX_TEXT[p.name]:,} are allowed"
     if p.name == "particle_fields":
         bad = [v for v in value if v not in p.choices]
         if bad:

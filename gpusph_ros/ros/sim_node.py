@@ -156,6 +156,9 @@ class SimNode(LifecycleNode):
         changes = {p.name: p.value for p in parameters if p.name in node_params.BY_NAME}
         if not changes:
             return SetParametersResult(successful=True)
+        if self.session.state == "shut down":  # as the services: nothing more is taken
+            return SetParametersResult(successful=False, reason=f"{', '.join(changes)}: the node is shut down "
+                                                                "(lifecycle state finalized); start a new one")
         try:
             reason = node_params.check({**self.values(), **changes}, changed=changes)
         except Exception as err:  # a scene file no check foresaw: refused, never an exit

@@ -108,6 +108,8 @@ def builtin_names() -> list:
 def read_yaml(sub: str, name_or_path, field_name: str, what: str):
     """(path, text, data) of a YAML file given by path or by the name of one shipped in
     config/<sub>; ConfigError on ``field_name`` when it is missing or not YAML."""
+    if len(str(name_or_path)) > MAX_PATH:
+        raise ConfigError(field_name, name_or_path, f"a path of at most {MAX_PATH} characters")
     path = Path(name_or_path)
     if not path.suffix and (config_dir(sub) / f"{name_or_path}.yaml").is_file():
         path = config_dir(sub) / f"{name_or_path}.yaml"
@@ -165,10 +167,25 @@ def _mapping(where, value, keys, required=(), whole="scene"):
     return value
 
 
+MAX_PATH = 4096  # characters of a path (Linux's PATH_MAX): a longer one is refused before the file system sees it
+MAX_HEADROOM = 10.0  # [tank heights] of air above the tank: more is a domain of nothing
+MAX_RADIUS_DX = 100.0  # [dx] a column probe wider than this averages the tank, not a column
+MAX_NAME = 64  # characters of a scene, box or probe name: it becomes part of a topic name
+
+
 def _name(where, value):
-    if not isinstance(value, str) or not value.replace("_", "").isalnum() or not value[0].isalpha():
-        raise ConfigError(where, value, "a name of letters, digits and _ starting with a letter (used in topic names)")
+    # ROS topic names take ASCII letters, digits and _ only: 'wässer' passed isalnum and failed at reset
+    if (not isinstance(value, str) or not value.isascii() or not value.replace("_", "").isalnum()
+            or not value[0].isalpha() or len(value) > MAX_NAME):
+        raise ConfigError(where, value, f"a name of at most {MAX_NAME} ASCII letters, digits and _ starting with a "
+                                        "letter (used in topic names)")
     return value
+
+
+def _text(where, value) -> str:
+    if not isinstance(value, str):
+        raise ConfigError(where, value, "a text (a YAML string)")
+    return value.strip()
 
 
 def _inside(where, point, tank, dim):
@@ -251,7 +268,7 @@ def _probes(probes_in, tank, dim) -> list:
         length = dim if kind in ("point", "pressure_sensor") else dim - 1
         position = _pad3(_vector(f"{where}.position", item["position"], length))
         _inside(f"{where}.position", position, tank, length)
-        radius = _number(f"{where}.radius_dx", item.get("radius_dx", 3.0), lo=0.0, lo_open=True)
+        radius = _number(f"{where}.radius_dx", item.get("radius_dx", 3.0), lo=0.0, hi=MAX_RADIUS_DX, lo_open=True)
         heights = ()
         if kind == "profile":
             raw = item.get("heights")
@@ -297,7 +314,7 @@ def parse_scene(data, default_name: str = "scene") -> Scene:
     if not MIN_GRAVITY <= -gravity[up] <= MAX_GRAVITY:
         raise ConfigError("gravity", list(gravity[:dim]), f"a magnitude in [{MIN_GRAVITY:g}, {MAX_GRAVITY:g}] m/s^2 "
                                                           "(it sets the sound speed and so the time step)")
-    headroom = _number("headroom", data.get("headroom", 0.5), lo=0.0)
+    headroom = _number("headroom", data.get("headroom", 0.5), lo=0.0, hi=MAX_HEADROOM)
     periodic = data.get("periodic", [False] * dim)
     if (not isinstance(periodic, list) or len(periodic) != dim
             or not all(isinstance(p, bool) for p in periodic) or periodic[up]):
@@ -314,6 +331,11 @@ def parse_scene(data, default_name: str = "scene") -> Scene:
         _, name, lo, hi = _box(f"fluid[{k}]", item, tank, dim)
         fluid.append(Box(name, lo, hi))
     _unique("fluid", [b.name for b in fluid])
+    for k, a in enumerate(fluid):  # two boxes over one region fill it twice: particles on top of each other
+        for b in fluid[k + 1:]:
+            if all(min(a.hi[ax], b.hi[ax]) > max(a.lo[ax], b.lo[ax]) for ax in range(dim)):
+                raise ConfigError(f"fluid[{fluid.index(b)}]", b.name, f"a box clear of the other fluid boxes: it "
+                                                                      f"overlaps {a.name!r}")
     surface = max(b.hi[up] for b in fluid)
     # the reference depth H sets c0 = c0_coef sqrt(g H) and the wall forces: a fluid deeper than the
     # tank is no tank's, and its sound speed would take millions of steps a second
@@ -329,7 +351,8 @@ def parse_scene(data, default_name: str = "scene") -> Scene:
     name = data.get("name", default_name)
     _name("name", name)
     return Scene(name=name, dim=dim, tank=tank, gravity=gravity, depth=depth, fluid=fluid,
-                 description=str(data.get("description", "")).strip(), source=str(data.get("source", "")).strip(),
+                 description=_text("description", data.get("description", "")),
+                 source=_text("source", data.get("source", "")),
                  headroom=headroom, periodic=periodic, walls=walls, wet_bed=wet_bed, obstacles=obstacles,
                  probes=probes, run_settings=dict(run), analysis=_analysis(data.get("analysis")))
 
