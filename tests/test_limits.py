@@ -4,6 +4,7 @@ removes fluid only when told to, and output folders checked before a run is buil
 import io
 import re
 from contextlib import redirect_stderr
+from pathlib import Path
 
 import pytest
 
@@ -164,3 +165,18 @@ def test_no_entry_point_quotes_a_file_that_is_no_scene_run_or_study(tmp_path, co
         assert SECRET not in message, (main.__name__, message)
         if named:
             assert f": {named}: not allowed" in message, message
+
+
+def test_no_recording_goes_into_the_operating_systems_folders(tmp_path):
+    """record_dir and --out: the root and the system's folders are refused whatever the permissions
+    (a node running as root accepted /etc), also through '..' and a link; anywhere else is as before."""
+    from gpusph_ros.output.recording import folder_problem
+
+    link = tmp_path / "etc_link"
+    link.symlink_to("/etc")
+    depth = len(Path.cwd().parts)
+    for path, folder in (("/etc", "/etc"), ("/", "/"), ("/" + "../" * 3 + "etc/bags", "/etc"),
+                         ("../" * depth + "usr/local/bags", "/usr"), (str(link / "bags"), "/etc")):
+        problem = folder_problem(path)
+        assert problem and f"lies in {folder}," in problem, (path, problem)
+    assert folder_problem(tmp_path / "bags") is None
