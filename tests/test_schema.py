@@ -64,6 +64,11 @@ def test_good_scene_parses_into_three_vectors():
     (("headroom",), 1.0e6, "headroom", "<= 10"),
     (("probes", "col", "radius_dx"), 1.0e9, "probes.col.radius_dx", "<= 100"),
     (("description",), {"a": 1}, "description", "a text"),
+    (("probes",), {f"g{k}": {"type": "gauge", "position": [0.5, 0.25]} for k in range(257)}, "probes",
+     "at most 256 probes"),  # 5,000 gauges: a node answered no parameter call for 96 s
+    (("probes", "prof", "heights"), [0.01] * 65, "probes.prof.heights", "at most 64"),
+    (("obstacles",), [{"name": f"o{k}", "lo": [0.6, 0.0, 0.0], "hi": [0.61, 0.01, 0.1]} for k in range(33)],
+     "obstacles", "at most 32"),
     (("fluid", 0, "name"), "w\u00e4sser", "fluid[0].name", "ASCII letters"),  # the node's reset failed on it
     (("fluid", 0, "name"), "a" * 65, "fluid[0].name", "at most 64"),
     (("fluid",), [], "fluid", "at least one box"),
