@@ -152,6 +152,8 @@ class Run:
             status = f"failed: {err}"
         except RuntimeError as err:  # e.g. time stuck: a step below what float64 adds to the clock
             status = f"failed: {err}"
+        except OSError as err:  # the recording's disk is full (it closed itself, readable) or went away
+            status = f"failed: the recording could not be written: {err.strerror or err}"
         except KeyboardInterrupt:
             status = "interrupted"
         result = self.result(status)

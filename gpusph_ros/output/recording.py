@@ -17,7 +17,9 @@ at most the last FLUSH_EVERY seconds: its file lacks only the MCAP summary and f
 ``repair`` (``gpusph-analyze --repair BAG``, what ``ros2 bag reindex`` is to rosbag2) rebuilds from
 the complete chunks, so that rosbags and the ``mcap`` tools open it.
 """
+import errno
 import os
+import shutil
 import time
 from importlib.metadata import version
 from pathlib import Path
@@ -33,6 +35,24 @@ from . import msgdefs
 
 CHUNK_SIZE = 1 << 20
 FLUSH_EVERY = 1.0  # [s] of wall clock: the most a killed recording loses
+# A recording never fills its disk: before each message it checks that the open chunk, the message,
+# the summary and footer a clean close writes, and SPACE_MARGIN still fit, and otherwise closes
+# itself, whole and readable, with everything written so far (a write that failed on a full disk
+# left a file that --repair, which needs as much space again, could not mend)
+SPACE_MARGIN = 256 * 1024  # [bytes] for metadata.yaml and what the estimate below misses
+MESSAGE_OVERHEAD = 64  # [bytes] a message record's header and its message index entry
+
+
+class DiskFull(OSError):
+    """The recording closed itself: its disk has no room for more."""
+
+    def __init__(self, message: str):
+        super().__init__(errno.ENOSPC, message)
+
+
+def free_bytes(path) -> int:
+    """Bytes free to this process on the file system of ``path``."""
+    return shutil.disk_usage(path).free
 _INFINITE = {"sec": 9223372036, "nsec": 854775807}  # rmw's "infinite" duration
 
 
@@ -114,38 +134,66 @@ class BagRecorder:
         self.path = Path(path)
         if self.path.exists() and any(self.path.iterdir()):
             raise FileExistsError(f"record_dir: {self.path} exists and is not empty; choose a new directory")
+        meta = {k: str(v) for k, v in metadata.items()}
+        existing = next(q for q in [self.path, *self.path.parents] if q.exists())
+        need = 2 * SPACE_MARGIN + sum(len(k) + len(v) for k, v in meta.items())
+        if free_bytes(existing) < need:  # refused before anything is made: no empty folder, no 0-byte file
+            raise DiskFull(f"record_dir: {existing} has {free_bytes(existing):,} bytes free; a recording needs "
+                           f"at least {need:,} to start")
+        created = not self.path.exists()
         self.path.mkdir(parents=True, exist_ok=True)
         self.file_name = f"{self.path.name}_0.mcap"
-        self._stream = _FlushingFile(self.path / self.file_name)
-        self._writer = Writer(self._stream, chunk_size=chunk_size, compression=CompressionType.NONE)
-        self._writer.start(profile="ros2", library=f"gpusph_ros {version('gpusph_ros')}; mcap {version('mcap')}")
-        self._writer.add_metadata("gpusph_ros", {k: str(v) for k, v in metadata.items()})
-        self._schemas, self._channels, self._topics = {}, {}, {}
-        self.count, self.first, self.last = 0, None, None
-        self.closed = False
-        self._flushed = time.monotonic()
-        self._write_metadata_yaml()
+        self._chunk_size = chunk_size
+        self._pending = 0  # bytes of messages in the open chunk
+        self._chunks = 0
+        self._summary_fixed = 2048 + sum(len(k) + len(v) + 32 for k, v in meta.items())
+        try:
+            self._stream = _FlushingFile(self.path / self.file_name)
+            self._writer = Writer(self._stream, chunk_size=chunk_size, compression=CompressionType.NONE)
+            self._writer.start(profile="ros2", library=f"gpusph_ros {version('gpusph_ros')}; mcap {version('mcap')}")
+            self._writer.add_metadata("gpusph_ros", meta)
+            self._schemas, self._channels, self._topics = {}, {}, {}
+            self.count, self.first, self.last = 0, None, None
+            self.closed = False
+            self._flushed = time.monotonic()
+            self._write_metadata_yaml()
+        except OSError:
+            if created:
+                shutil.rmtree(self.path, ignore_errors=True)
+            raise
 
     def add_topic(self, topic: str, type_name: str, qos: str):
         """Declare a topic before its first message (its offered QoS goes into the bag)."""
         if type_name not in self._schemas:
-            self._schemas[type_name] = self._writer.register_schema(
-                name=type_name, encoding="ros2msg", data=msgdefs.full_text(type_name).encode())
+            text = msgdefs.full_text(type_name).encode()
+            self._schemas[type_name] = self._writer.register_schema(name=type_name, encoding="ros2msg", data=text)
+            self._summary_fixed += len(text) + 64
         self._channels[topic] = self._writer.register_channel(
             topic=topic, message_encoding="cdr", schema_id=self._schemas[type_name],
             metadata={"offered_qos_profiles": qos, "topic_type_hash": msgdefs.type_hash(type_name)})
         self._topics[topic] = {"type": type_name, "qos": qos, "count": 0}
+        self._summary_fixed += 2 * len(topic) + len(qos) + 160  # its channel record and metadata.yaml entry
 
     def write(self, topic: str, message, t: float, data: bytes = None):
         """Record ``message`` on ``topic`` at simulated time ``t`` [s]; ``data`` is its CDR
         serialisation when the caller already has it (a publisher's bytes)."""
+        if self.closed:
+            raise DiskFull(f"{self.path}: the recording was closed (its disk is full)")
         if topic not in self._channels:
             self.add_topic(topic, msgdefs.type_name_of(type(message)), qos_yaml())
         ns = int(round(t * 1e9))
         entry = self._topics[topic]
-        self._writer.add_message(self._channels[topic], log_time=ns, publish_time=ns,
-                                 data=serialize_message(message) if data is None else data,
+        data = serialize_message(message) if data is None else data
+        need = self._pending + len(data) + MESSAGE_OVERHEAD + self._summary_bytes() + SPACE_MARGIN
+        if free_bytes(self.path) < need:
+            self.close({"status": f"stopped: the disk is full after {self.count} messages"})
+            raise DiskFull(f"{self.path}: the disk is full: the recording is closed, readable, with its "
+                           f"{self.count} messages up to t = {(self.last or 0) * 1e-9:.6g} s")
+        self._writer.add_message(self._channels[topic], log_time=ns, publish_time=ns, data=data,
                                  sequence=entry["count"])
+        self._pending += len(data) + MESSAGE_OVERHEAD
+        if self._pending >= self._chunk_size:  # the writer closed the chunk
+            self._pending, self._chunks = 0, self._chunks + 1
         entry["count"] += 1
         self.count += 1
         self.first = ns if self.first is None else min(self.first, ns)
@@ -160,7 +208,14 @@ class BagRecorder:
             return
         self._flushed = now
         self._writer.flush()
+        if self._pending:
+            self._pending, self._chunks = 0, self._chunks + 1
         self._write_metadata_yaml()
+
+    def _summary_bytes(self) -> int:
+        """An upper estimate of what a clean close writes: schemas, channels, the chunk indexes
+        (one entry per channel each), statistics, the metadata index and the footer."""
+        return self._summary_fixed + (self._chunks + 1) * (128 + 24 * len(self._channels))
 
     def close(self, result: dict = None):
         """Finish the file (summary, footer) and write the final metadata.yaml."""
