@@ -7,7 +7,9 @@ particles: /diagnostics WARN while they are excluded, ERROR once they pass max_e
 
 Each test starts its own node (the venv's `sim_node`, DamBreak 1 at 6 cm) on a DDS domain of its
 own, so no test depends on another."""
+import collections
 import os
+import random
 import signal
 import subprocess
 import sys
@@ -304,6 +306,102 @@ def test_every_lifecycle_transition_not_allowed_from_a_state_is_refused_and_the_
         assert "not allowed from state 'finalized'" in node.log.read_text()
     finally:
         node.close()
+
+
+# what the seeded fuzz draws from: each parameter's values, good ones and bad ones (a type the
+# parameter is not declared with, out of range, unknown choices, absurd texts and floats)
+FUZZ_VALUES = {
+    "scene": ["dambreak1_thesis", "collapse_2d", "no_such_scene", "/etc/shadow", "", "x" * 5000],
+    "dx": [0.05, 0.06, 0.08, 0.0, -1.0, 50.0, 5e-324, float("nan"), 3],
+    "kernel": ["quadratic", "cubic_spline", "wendland", "gauss", ""],
+    "viscosity": ["artificial", "laminar", "sps", "none"],
+    "sps": [True, False, "yes"],
+    "boundary": ["dynamic", "mdbc", "lennard_jones", "monaghan_kajtar", "planes"],
+    "mdbc_slip": ["none", "no_slip", "free_slip", "maybe"],
+    "density_diffusion": ["none", "delta", "shepard"],
+    "precision": ["float32", "float16"],  # no float64: a first build compiles its kernels, which is no answer time
+    "device": ["cpu", "cuda:7", "tpu"],
+    "cfl": [0.2, 0.3, 0.4, 0.0, 2.0, float("inf"), 1],
+    "c0": [0.0, 20.0, -3.0, 1.0e9],
+    "visco_bound_factor": [0.0, 1.0, 11.0],
+    "max_excluded_fraction": [0.0, 0.01, 0.5, 1.0],
+    "end_time": [0.0, 0.5, 30.0, 1.0e30, 5e-324, -1.0],
+    "output_rate": [0.0, 20.0, 100.0, 5e-324, 1.0e9],
+    "real_time_factor": [0.0, 0.5, 1.0e6],
+    "publish_particles": [True, False],
+    "particle_fields": [["vx"], ["vx", "vy", "vz", "density", "pressure"], ["speed"], ["vx", "vx"]],
+    "frame_id": ["world", "map", "", "w" * 300],
+    "model": ["full", "slab", "2d", "3d"],
+    "crop": [True, False],
+    "wall_planes": [True, False],
+    "autostart": [False],
+}
+
+
+def test_two_hundred_seeded_parameters_calls_and_transitions_are_each_answered_within_2_s(tmp_path):
+    """One node, 200 seeded random actions: a parameter set to a good or a bad value, a service
+    call (reset, pause, step, record) or a lifecycle transition (shut-down last of all). Every one is
+    answered within 2 s, the node survives them all and shuts down cleanly, and every bag it wrote
+    reads back whole."""
+    from lifecycle_msgs.msg import Transition
+    from lifecycle_msgs.srv import ChangeState, GetState
+
+    rng = random.Random(20261204)
+    node = Node(tmp_path, BASE_DOMAIN + 2, "publish_particles:=false", f"record_dir:={tmp_path / 'bags'}")
+    transitions = [Transition.TRANSITION_CONFIGURE, Transition.TRANSITION_CLEANUP, Transition.TRANSITION_ACTIVATE,
+                   Transition.TRANSITION_DEACTIVATE]
+    try:
+        client = node.client
+        node.status(lambda s: s["state"] == "running", timeout=300.0)
+        slow, kinds, answers = [], set(), collections.Counter()
+        for _ in range(200):
+            kind = rng.choice(["parameter", "parameter", "parameter", "service", "service", "transition"])
+            kinds.add(kind)
+            start = time.monotonic()
+            if kind == "parameter":
+                name = rng.choice(sorted(FUZZ_VALUES))
+                try:
+                    answers["parameter", client.set(**{name: rng.choice(FUZZ_VALUES[name])})[0].successful] += 1
+                except TimeoutError:
+                    slow.append((name, "no answer"))
+            elif kind == "service":
+                name, srv, fields = rng.choice([("reset", Trigger, {}), ("step", Trigger, {}),
+                                                ("set_paused", SetBool, {"data": True}),
+                                                ("set_paused", SetBool, {"data": False}),
+                                                ("record", SetBool, {"data": True}),
+                                                ("record", SetBool, {"data": False})])
+                try:
+                    answers[name, client.call(name, srv, timeout=ANSWER, **fields).success] += 1
+                except TimeoutError:
+                    slow.append((name, "no answer"))
+            else:
+                try:
+                    answers["transition", client.call("change_state", ChangeState, timeout=ANSWER,
+                                                      transition=Transition(id=rng.choice(transitions))).success] += 1
+                except TimeoutError:
+                    slow.append(("change_state", "no answer"))
+            took = time.monotonic() - start
+            if took > ANSWER:
+                slow.append((kind, round(took, 2)))
+            assert node.proc.poll() is None, node.log.read_text()[-3000:]
+        assert not slow, slow
+        assert kinds == {"parameter", "service", "transition"}
+        # the draw reached both answers: good values taken and bad refused, transitions that worked and
+        # ones the state refused; and scenes were rebuilt
+        for kind in ("parameter", "transition"):
+            assert answers[kind, True] and answers[kind, False], answers
+        assert answers["reset", True], answers
+        state = client.call("get_state", GetState).current_state.label
+        shutdown = {"unconfigured": Transition.TRANSITION_UNCONFIGURED_SHUTDOWN,
+                    "inactive": Transition.TRANSITION_INACTIVE_SHUTDOWN,
+                    "active": Transition.TRANSITION_ACTIVE_SHUTDOWN}[state]
+        assert client.call("change_state", ChangeState, transition=Transition(id=shutdown)).success
+        assert node.alive()
+    finally:
+        node.close()
+    for bag in (tmp_path / "bags").iterdir() if (tmp_path / "bags").exists() else ():
+        with AnyReader([bag]) as reader:
+            assert reader.message_count == sum(1 for _ in reader.messages()), bag
 
 
 # a column dropped 0.45 m onto a Lennard-Jones floor too weak to hold it (its strength 5 g H is
