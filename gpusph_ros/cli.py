@@ -81,6 +81,8 @@ def run_main(argv=None):
     except (ConfigError, FileExistsError, ValueError, OSError) as err:
         print(f"gpusph-run: {err}", file=sys.stderr)
         return 1
+    for warning in scene.warnings:
+        print(f"gpusph-run: warning: {warning}", file=sys.stderr)
     print(f"{run.summary()} -> {args.out}", flush=True)
     # SIGTERM only asks the run to stop between two steps: an exception raised wherever the
     # signal lands (inside the MCAP writer, say) could leave the recording unclosable

@@ -1,6 +1,7 @@
 """Scene files and run configurations: every bad field gets one error naming the field, its value
 and what is allowed; the built-in scenes load; overrides layer in order."""
 import copy
+import io
 
 import pytest
 import yaml
@@ -35,6 +36,25 @@ def with_change(path, value):
     else:
         target[path[-1]] = value
     return data
+
+
+def test_a_fluid_box_up_to_the_open_tanks_top_is_legal_and_said(tmp_path):
+    """Legal (a brim-full tank) but rarely meant: the scene carries a warning that gpusph-run prints."""
+    from contextlib import redirect_stderr
+
+    from gpusph_ros.cli import run_main
+
+    assert parse_scene(GOOD).warnings == []
+    full = with_change(("fluid", 0, "hi"), [0.3, 0.5, 0.4])
+    scene = parse_scene(full)
+    assert scene.warnings and "reaches the top of the open tank (0.4 m)" in scene.warnings[0]
+    path = tmp_path / "full.yaml"
+    path.write_text(yaml.safe_dump(full))
+    err = io.StringIO()
+    with redirect_stderr(err):
+        run_main([str(path), "--set", "dx=0.05", "--set", "end_time=0.001", "--out", str(tmp_path / "bag"),
+                  "--quiet"])
+    assert "gpusph-run: warning: fluid box 'column' reaches the top" in err.getvalue(), err.getvalue()
 
 
 def test_good_scene_parses_into_three_vectors():

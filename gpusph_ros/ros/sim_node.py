@@ -217,6 +217,8 @@ class SimNode(LifecycleNode):
         self.internal_error = ""
         text = run.summary()
         self.get_logger().info(text)
+        for warning in run.scene.warnings:
+            self.get_logger().warning(f"scene: {warning}")
         return text
 
     def _maybe_record(self) -> str:

@@ -89,6 +89,8 @@ class Scene:
     # the file's `analysis:` section: which comparison its recordings get (ANALYSES), and whether the
     # thesis's GPUSPH tables are of this very geometry; empty: none
     analysis: dict = field(default_factory=dict)
+    # what is legal but rarely meant, said once where the scene is run (gpusph-run, the node's log)
+    warnings: list = field(default_factory=list)
     text: str = ""  # the file as written, recorded with each run
     # where the tank's corner lies in the world: (0, 0, 0) but for a cropped scene (reduce.py),
     # whose boxes and probes are given from its own corner
@@ -354,6 +356,8 @@ def parse_scene(data, default_name: str = "scene") -> Scene:
                 raise ConfigError(f"fluid[{fluid.index(b)}]", b.name, f"a box clear of the other fluid boxes: it "
                                                                       f"overlaps {a.name!r}")
     surface = max(b.hi[up] for b in fluid)
+    warnings = [f"fluid box {b.name!r} reaches the top of the open tank ({tank[up]:g} m): any motion spills it "
+                f"over the walls" for b in fluid if b.hi[up] >= tank[up]]
     # the reference depth H sets c0 = c0_coef sqrt(g H) and the wall forces: a fluid deeper than the
     # tank is no tank's, and its sound speed would take millions of steps a second
     depth = _number("depth", data.get("depth", surface), lo=0.0, hi=tank[up], lo_open=True)
@@ -371,7 +375,7 @@ def parse_scene(data, default_name: str = "scene") -> Scene:
                  description=_text("description", data.get("description", "")),
                  source=_text("source", data.get("source", "")),
                  headroom=headroom, periodic=periodic, walls=walls, wet_bed=wet_bed, obstacles=obstacles,
-                 probes=probes, run_settings=dict(run), analysis=_analysis(data.get("analysis")))
+                 probes=probes, run_settings=dict(run), analysis=_analysis(data.get("analysis")), warnings=warnings)
 
 
 def _analysis(value) -> dict:
