@@ -1,0 +1,59 @@
+"""Cases whose wall loads are known exactly, built particle by particle where a scene file cannot
+say them (no gravity, a wall standing free): what the wall pressure and the net force on a wall are
+checked against (tests/test_wall_pressure.py, bench/jet_impingement.py).
+
+An impinging jet: a 2D block of fluid b wide moving at U onto a wall of boundary particles (a body),
+without gravity. Once the water-hammer transient of the first contact has passed and until the
+jet's tail arrives, momentum gives the force per unit depth rho U^2 b, and the stagnation point
+carries rho U^2 / 2 (Milne-Thomson, Theoretical Hydrodynamics, Section 11.52).
+"""
+import numpy as np
+
+from ..sph import BOUNDARY, FLUID, Particles, SolverConfig, boundaries
+
+RHO0, U, WIDTH = 1000.0, 1.0, 0.1  # [kg/m^3], [m/s], [m]: the jet
+LENGTH = 1.5  # [m] of jet: its tail reaches the wall at about (GAP + LENGTH) / U
+GAP = 0.02  # [m] between the jet's head and the wall's face at t = 0
+WALL_HALF = 1.0  # [m] of wall above and below the jet's axis: the sheets run along it, about U a second
+C0 = 15.0  # [m/s] the sound speed, 15 U: density within about 0.5% in the steady jet
+
+
+def impinging_jet(per_width: int, boundary: str = "dynamic", **settings):
+    """(config, particles, x of the wall's face, dx) of the jet with ``per_width`` particles across
+    it, its axis at y = 0, hitting a wall of the model ``boundary`` (body 0) at x = face."""
+    dx = WIDTH / per_width
+    layers = boundaries.model(boundary).layers(settings.get("hdx", SolverConfig.hdx))
+    face = GAP + LENGTH  # the wall's face at x = face; the jet's axis at y = 0
+    nx, ny = int(round(LENGTH / dx)), per_width
+    xs = face - GAP - LENGTH + (np.arange(nx) + 0.5) * dx
+    ys = -WIDTH / 2 + (np.arange(ny) + 0.5) * dx
+    gx, gy = np.meshgrid(xs, ys, indexing="ij")
+    fluid = np.column_stack([gx.ravel(), gy.ravel(), np.zeros(gx.size)])
+    nw = int(round(2 * WALL_HALF / dx))
+    wx = face + (np.arange(layers) + 0.5) * dx
+    wy = -WALL_HALF + (np.arange(nw) + 0.5) * dx
+    hx, hy = np.meshgrid(wx, wy, indexing="ij")
+    wall = np.column_stack([hx.ravel(), hy.ravel(), np.zeros(hx.size)])
+    n_f, n_w = len(fluid), len(wall)
+    particles = Particles(pos=np.vstack([fluid, wall]),
+                          vel=np.vstack([np.tile([U, 0.0, 0.0], (n_f, 1)), np.zeros((n_w, 3))]),
+                          rho=np.full(n_f + n_w, RHO0), mass=np.full(n_f + n_w, RHO0 * dx * dx),
+                          ptype=np.concatenate([np.full(n_f, FLUID), np.full(n_w, BOUNDARY)]),
+                          body=np.concatenate([np.full(n_f, -1), np.zeros(n_w, dtype=int)]))
+    pad = 1.5  # the sheets leave the wall's ends at about U: room for them until the tail arrives
+    cfg = SolverConfig(dim=2, dx=dx, gravity=(0.0, -1.0e-6, 0.0), depth=WIDTH, c0=C0, boundary=boundary,
+                       domain_lo=(-pad, -WALL_HALF - pad, -1.0),
+                       domain_hi=(face + (layers + 1) * dx, WALL_HALF + pad, 1.0),
+                       solids=[((face, -WALL_HALF, -1.0), (face + layers * dx, WALL_HALF, 1.0))],
+                       energy_growth_ratio=0.0, rho_min_ratio=0.5, max_excluded_fraction=0.5, **settings)
+    return cfg, particles, face, dx
+
+
+def jet_force() -> float:
+    """rho U^2 b [N/m]: the momentum flux the wall stops."""
+    return RHO0 * U ** 2 * WIDTH
+
+
+def jet_stagnation_pressure() -> float:
+    """rho U^2 / 2 [Pa] at the stagnation point."""
+    return 0.5 * RHO0 * U ** 2
