@@ -36,7 +36,7 @@ SPS = viscosity.VISCOSITY_ID["sps"]
 def params(cfg) -> dict:
     """The Params fields of the step itself under ``cfg`` (a SolverConfig): the dimension, gravity,
     the domain and its periodic axes, the time step's CFL (or fixed step), and settling."""
-    return {"dim": cfg.dim, "gravity": cfg.gravity, "lo": cfg.domain_lo, "hi": cfg.domain_hi,
+    return {"dim": cfg.dim, "dx": cfg.dx, "gravity": cfg.gravity, "lo": cfg.domain_lo, "hi": cfg.domain_hi,
             "periodic": tuple(1 if a else 0 for a in cfg.periodic), "cfl": cfg.cfl, "dt_fixed": cfg.dt_fixed,
             "settle_tau": cfg.settle_tau, "settle_until": cfg.settle_until}
 

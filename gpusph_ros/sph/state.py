@@ -25,6 +25,7 @@ def build(scalar):
     @wp.struct
     class Params:
         dim: int
+        dx: scalar  # the particle spacing
         kernel: int
         norm: scalar
         h: scalar
