@@ -69,6 +69,7 @@ def test_good_scene_parses_into_three_vectors():
     (("tank",), [1.0, -0.5, 0.4], "tank[1]", ">= 0"),
     (("tank",), [1.0, 0.5], "tank", "a list of 3 numbers"),
     (("gravity",), [0.0, 0.0, 9.81], "gravity", "pointing down"),
+    (("gravity",), [9.0, 0.0, -5.0], "gravity", "tilted by at most 45 degrees"),
     (("gravity",), [0.0, 0.0, -1.0e30], "gravity", "a magnitude in [0.0981, 981]"),  # time stuck at 0
     (("gravity",), [0.0, 0.0, -1.0e-30], "gravity", "a magnitude in [0.0981, 981]"),
     (("depth",), 1.0e6, "depth", "<= 0.4"),  # deeper than the tank: c0 took millions of steps a second

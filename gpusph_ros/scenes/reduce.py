@@ -71,6 +71,8 @@ def uniform_across_y(scene: Scene, obstacles: bool = True) -> str:
     or "" when it is."""
     if scene.dim != 3:
         return "the scene is 2D already"
+    if scene.gravity[1] != 0.0:
+        return f"gravity has a part across y ({scene.gravity[1]:g} m/s^2)"
     width = scene.tank[1]
     for kind, boxes in (("fluid", scene.fluid), ("obstacles", scene.obstacles if obstacles else [])):
         for k, box in enumerate(boxes):
@@ -93,7 +95,8 @@ def _section(scene: Scene) -> Scene:
         probes.append(dataclasses.replace(p, position=position))
     walls = {face: scene.walls.get(face, "particles") for face in ("x_min", "x_max", "floor")}
     return dataclasses.replace(scene, dim=2, tank=(scene.tank[0], scene.tank[2], 0.0),
-                               gravity=(0.0, scene.gravity[2], 0.0), periodic=(scene.periodic[0], False, False),
+                               gravity=(scene.gravity[0], scene.gravity[2], 0.0),
+                               periodic=(scene.periodic[0], False, False),
                                walls=walls, fluid=[box2(b) for b in scene.fluid],
                                obstacles=[box2(o) for o in scene.obstacles], probes=probes)
 

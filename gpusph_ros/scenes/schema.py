@@ -327,10 +327,13 @@ def parse_scene(data, default_name: str = "scene") -> Scene:
     default_g = [0.0] * dim
     default_g[up] = -9.81
     gravity = _pad3(_vector("gravity", data.get("gravity", default_g), dim))
-    if gravity[up] >= 0.0 or any(gravity[ax] != 0.0 for ax in range(dim) if ax != up):
+    # a horizontal part is a tank's horizontal acceleration a (the fluid feels g - a), up to 1 g
+    across = math.sqrt(sum(gravity[ax] ** 2 for ax in range(dim) if ax != up))
+    if gravity[up] >= 0.0 or across > -gravity[up]:
         raise ConfigError("gravity", list(gravity[:dim]),
-                          f"a vector pointing down the vertical axis ({'xyz'[up]}), e.g. {default_g}")
-    if not MIN_GRAVITY <= -gravity[up] <= MAX_GRAVITY:
+                          f"a vector pointing down the vertical axis ({'xyz'[up]}), tilted by at most 45 degrees "
+                          f"(a horizontal acceleration of the tank up to 1 g), e.g. {default_g}")
+    if not MIN_GRAVITY <= math.sqrt(sum(c * c for c in gravity)) <= MAX_GRAVITY:
         raise ConfigError("gravity", list(gravity[:dim]), f"a magnitude in [{MIN_GRAVITY:g}, {MAX_GRAVITY:g}] m/s^2 "
                                                           "(it sets the sound speed and so the time step)")
     headroom = _number("headroom", data.get("headroom", 0.5), lo=0.0, hi=MAX_HEADROOM)
