@@ -3,9 +3,9 @@ rho0 g d, d its depth below the surface, one above the water reads 0, and the wa
 on a block on the floor is the weight of the water over it. The tank is 0.6 m long, water 0.2 m
 deep, dx = 1 cm, settled for 0.5 s, read at 1 s, under dynamic boundary particles (the fluid
 interpolated 1.5 h off the face) and under mDBC (the ghost node's pressure cloned to the face); and
-a tank under a horizontal acceleration (gravity tilted in the scene) on its end walls. Tolerance 2% (measured: dynamic, sensors within 0.74%, the block's load within 0.03%, and on a
-0.4 m tank without the block within 1.3% at dx = 5 mm; mDBC, sensors within 1.2%, the load within
-0.21%).
+a tank under a horizontal acceleration (gravity tilted in the scene) on its end walls. Tolerance
+2% (measured: dynamic, sensors within 0.74%, the block's load within 0.03%, and on a 0.4 m tank
+without the block within 1.3% at dx = 5 mm; mDBC, sensors within 1.2%, the load within 0.21%).
 """
 import numpy as np
 import pytest
