@@ -38,23 +38,28 @@ def with_change(path, value):
     return data
 
 
-def test_a_fluid_box_up_to_the_open_tanks_top_is_legal_and_said(tmp_path):
-    """Legal (a brim-full tank) but rarely meant: the scene carries a warning that gpusph-run prints."""
+def test_a_fluid_box_that_fills_the_whole_tank_is_legal_and_said(tmp_path):
+    """Legal (a brim-full tank) but rarely meant: the scene carries a warning that gpusph-run prints.
+    A box up to the brim that leaves room along the tank (the thesis's DamBreak 1 column) is not
+    warned about."""
     from contextlib import redirect_stderr
 
     from gpusph_ros.cli import run_main
 
     assert parse_scene(GOOD).warnings == []
-    full = with_change(("fluid", 0, "hi"), [0.3, 0.5, 0.4])
+    assert parse_scene(with_change(("fluid", 0, "hi"), [0.3, 0.5, 0.4])).warnings == []  # up to the brim only
+    assert load_scene("dambreak1_thesis").warnings == []
+    full = with_change(("fluid", 0), {"name": "water", "lo": [0, 0, 0], "hi": [1.0, 0.5, 0.4]})
+    full["obstacles"] = []
     scene = parse_scene(full)
-    assert scene.warnings and "reaches the top of the open tank (0.4 m)" in scene.warnings[0]
+    assert scene.warnings and "fills the whole tank" in scene.warnings[0]
     path = tmp_path / "full.yaml"
     path.write_text(yaml.safe_dump(full))
     err = io.StringIO()
     with redirect_stderr(err):
         run_main([str(path), "--set", "dx=0.05", "--set", "end_time=0.001", "--out", str(tmp_path / "bag"),
                   "--quiet"])
-    assert "gpusph-run: warning: fluid box 'column' reaches the top" in err.getvalue(), err.getvalue()
+    assert "gpusph-run: warning: fluid box 'water' fills the whole tank" in err.getvalue(), err.getvalue()
 
 
 def test_good_scene_parses_into_three_vectors():

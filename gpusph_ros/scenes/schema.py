@@ -359,8 +359,8 @@ def parse_scene(data, default_name: str = "scene") -> Scene:
                 raise ConfigError(f"fluid[{fluid.index(b)}]", b.name, f"a box clear of the other fluid boxes: it "
                                                                       f"overlaps {a.name!r}")
     surface = max(b.hi[up] for b in fluid)
-    warnings = [f"fluid box {b.name!r} reaches the top of the open tank ({tank[up]:g} m): any motion spills it "
-                f"over the walls" for b in fluid if b.hi[up] >= tank[up]]
+    warnings = [f"fluid box {b.name!r} fills the whole tank: the water has nowhere to go but over the walls"
+                for b in fluid if all(b.lo[ax] <= 0.0 and b.hi[ax] >= tank[ax] for ax in range(dim))]
     # the reference depth H sets c0 = c0_coef sqrt(g H) and the wall forces: a fluid deeper than the
     # tank is no tank's, and its sound speed would take millions of steps a second
     depth = _number("depth", data.get("depth", surface), lo=0.0, hi=tank[up], lo_open=True)
