@@ -63,7 +63,7 @@ def run_main(argv=None):
 
     wp.config.log_level = wp.LOG_WARNING  # no per-module load lines
     from .analysis import report as R
-    from .output.recording import folder_problem
+    from .output.folders import folder_problem
     from .runner import Run
     from .scenes.schema import load_scene
     from .scenes.settings import resolve

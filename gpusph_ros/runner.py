@@ -17,7 +17,6 @@ import yaml
 from .measure.cloud import CloudPacker
 from .measure.suite import Measurements
 from .output import messages
-from .output.recording import BagRecorder, qos_yaml
 from .scenes.build import build_run
 from .sph import HealthError, NeighbourOverflow
 
@@ -91,7 +90,11 @@ class Run:
             "host": platform.node(), "started_utc": datetime.datetime.now(datetime.timezone.utc).isoformat(),
         }
 
-    def open_recording(self, path) -> BagRecorder:
+    def open_recording(self, path):
+        """A BagRecorder at ``path`` with this run's topics declared. The MCAP writer is loaded here,
+        when a recording starts: a node that never records runs without the mcap package."""
+        from .output.recording import BagRecorder, qos_yaml
+
         recorder = BagRecorder(path, self.describe())
         recorder.add_topic("/clock", "rosgraph_msgs/msg/Clock", qos_yaml(**CLOCK_QOS))
         if self.output.particle_every:

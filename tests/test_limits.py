@@ -170,7 +170,7 @@ def test_no_entry_point_quotes_a_file_that_is_no_scene_run_or_study(tmp_path, co
 def test_no_recording_goes_into_the_operating_systems_folders(tmp_path):
     """record_dir and --out: the root and the system's folders are refused whatever the permissions
     (a node running as root accepted /etc), also through '..' and a link; anywhere else is as before."""
-    from gpusph_ros.output.recording import folder_problem
+    from gpusph_ros.output.folders import folder_problem
 
     link = tmp_path / "etc_link"
     link.symlink_to("/etc")

@@ -65,6 +65,19 @@ def test_solver_imports_nothing_from_ros():
     assert out.returncode == 0, out.stdout + out.stderr
 
 
+def test_the_node_starts_without_the_mcap_package_until_it_records():
+    """mcap is from PyPI only: the node, the runner, the parameter checks and a run load without it,
+    and only opening a recording needs it."""
+    code = ("import sys; sys.modules['mcap'] = None; import gpusph_ros.ros.sim_node, gpusph_ros.runner; "
+            "import gpusph_ros.ros.node_params as p; assert p.check(p.DEFAULTS) is None; "
+            "from gpusph_ros.scenes.schema import load_scene; from gpusph_ros.scenes.settings import resolve; "
+            "scene = load_scene('collapse_2d'); run = gpusph_ros.runner.Run(scene, resolve(scene, dx=0.02)); "
+            "print('loaded', flush=True); run.open_recording('unused')")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO)
+    assert "loaded" in out.stdout, out.stderr[-2000:]
+    assert out.returncode != 0 and "ModuleNotFoundError" in out.stderr and "mcap" in out.stderr.splitlines()[-1]
+
+
 def test_the_runner_stands_below_the_node():
     """Layers point one way: the runner (and the output layer under it) import nothing of ros/."""
     code = ("import sys, gpusph_ros.runner, gpusph_ros.output.recording; "

@@ -10,7 +10,7 @@ import math
 from dataclasses import dataclass
 
 from ..measure.cloud import FIELDS as PARTICLE_FIELDS
-from ..output.recording import folder_problem
+from ..output.folders import folder_problem
 from ..scenes.reduce import MODELS
 from ..scenes.schema import builtin_names, load_scene
 from ..scenes.settings import resolve
