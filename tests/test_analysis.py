@@ -123,6 +123,13 @@ def test_a_users_scene_names_its_analysis_and_gets_the_same_comparison(tmp_path,
     scene.text = mine
     record_synthetic_bore(tmp_path / "none", scene)
     assert analyse(tmp_path / "none", reference_data)[0]["metrics"] == []
+    # a recording from before scenes named their analysis: its built-in scene's section is read
+    old = "\n".join(line for line in load_scene("dambreak2_015").text.splitlines() if not line.startswith("analysis:"))
+    scene = parse_scene(yaml.safe_load(old))
+    scene.text = old
+    record_synthetic_bore(tmp_path / "old", scene)
+    values = {m["key"]: m for m in analyse(tmp_path / "old", reference_data)[0]["metrics"]}
+    assert values["mean_velocity"]["experiment"] == 0.772 and values["mean_velocity"]["gpusph"] == 0.71
 
 
 def test_every_analysis_a_scene_may_name_exists_and_a_bad_one_is_refused():

@@ -39,7 +39,7 @@ def imports_by_layer() -> dict:
     found = {}
     for path in PACKAGE.rglob("*.py"):
         parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
-        package = parts[:-1] if parts[-1] != "__init__" else parts[:-1]
+        package = parts[:-1]
         module = ".".join(parts if parts[-1] != "__init__" else parts[:-1])
         for node in ast.walk(ast.parse(path.read_text())):
             if isinstance(node, ast.ImportFrom):
@@ -67,8 +67,8 @@ def test_every_layer_imports_only_the_layers_below_it():
 
 def test_the_rules_are_read_from_the_source():
     """The reader sees the arrows that exist (so the test above could fail): the runner uses the
-    solver and the scenes, and the node the runner."""
+    scenes, the measurements and the output, the scenes the solver, and the node the runner."""
     found = imports_by_layer()
-    assert {"sph", "scenes", "measure", "output"} <= found["runner"]
+    assert {"scenes", "measure", "output"} <= found["runner"] and "sph" in found["scenes"]
     assert "runner" in found["ros"]
     assert "theory" in found["scenes"]  # reduce.py: Stoker's bore speed

@@ -23,6 +23,7 @@ import numpy as np
 import yaml
 
 from ..output.messages import block_topic
+from ..share import config_dir
 from . import metrics as M
 from . import reference as R
 from .bag import read
@@ -237,20 +238,18 @@ def _analyse_lobovsky(c: Case):
 
 # each scene.analysis case (scenes/schema.py, ANALYSES): what its recordings are compared with
 ANALYSES = {"dambreak1": _analyse_dambreak1, "dambreak2": _analyse_dambreak2, "lobovsky": _analyse_lobovsky}
-# recordings made before scenes named their analysis: the built-in scenes' sections as shipped since
-_BEFORE_SCENES_NAMED_IT = {"dambreak1_thesis": {"case": "dambreak1", "gpusph": True},
-                           "dambreak1_lab": {"case": "dambreak1", "gpusph": False},
-                           "dambreak2_010": {"case": "dambreak2", "gpusph": True},
-                           "dambreak2_015": {"case": "dambreak2", "gpusph": True},
-                           "lobovsky_2d": {"case": "lobovsky", "gpusph": False}}
-
-
 def analysis_of(scene: dict, name: str) -> dict:
-    """The comparison a recording's scene asks for ({case, gpusph}), or {} for none."""
+    """The comparison a recording's scene asks for ({case, gpusph}), or {} for none. A recording
+    made before scenes named their analysis gets its built-in scene's section, read from the
+    shipped scene file of that name."""
+    if "analysis" not in scene and name.isidentifier():
+        shipped = config_dir("scenes") / f"{name}.yaml"
+        if shipped.is_file():
+            scene = yaml.safe_load(shipped.read_text()) or {}
     section = scene.get("analysis")
     if isinstance(section, dict) and section.get("case") in ANALYSES:
         return {"case": section["case"], "gpusph": bool(section.get("gpusph", False))}
-    return _BEFORE_SCENES_NAMED_IT.get(name, {}) if "analysis" not in scene else {}
+    return {}
 
 
 def analyse(path, data=None) -> tuple:

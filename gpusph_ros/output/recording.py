@@ -97,8 +97,9 @@ class BagRecorder:
         meta = {k: str(v) for k, v in metadata.items()}
         existing = next(q for q in [self.path, *self.path.parents] if q.exists())
         need = 2 * SPACE_MARGIN + sum(len(k) + len(v) for k, v in meta.items())
-        if free_bytes(existing) < need:  # refused before anything is made: no empty folder, no 0-byte file
-            raise DiskFull(f"record_dir: {existing} has {free_bytes(existing):,} bytes free; a recording needs "
+        free = free_bytes(existing)
+        if free < need:  # refused before anything is made: no empty folder, no 0-byte file
+            raise DiskFull(f"record_dir: {existing} has {free:,} bytes free; a recording needs "
                            f"at least {need:,} to start")
         created = not self.path.exists()
         self.path.mkdir(parents=True, exist_ok=True)

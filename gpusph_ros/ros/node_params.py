@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from ..measure.cloud import FIELDS as PARTICLE_FIELDS
 from ..output.folders import folder_problem
 from ..scenes.reduce import MODELS
-from ..scenes.schema import builtin_names, load_scene
+from ..scenes.schema import MAX_PATH, builtin_names, load_scene
 from ..scenes.settings import resolve
 from ..sph.config import LIVE, RESET, ConfigError, SolverConfig
 
@@ -106,7 +106,7 @@ def _device_names() -> list:
 
 # the longest text a parameter takes: a path (Linux's PATH_MAX), a frame id (tf2's frames are short
 # names; a 10^6-character one was written into every message, 590 MB of recording in 6 s)
-MAX_TEXT = {"scene": 4096, "record_dir": 4096, "frame_id": 256}
+MAX_TEXT = {"scene": MAX_PATH, "record_dir": MAX_PATH, "frame_id": 256}
 
 
 def _check_one(p: Param, value):
