@@ -2,21 +2,27 @@
 messages of each output step to a recorder (and, in the node, to publishers).
 
 Outputs fall at k / output_rate for k = 0, 1, ... up to the end time; each carries /clock
-first, then the measurements of the scene's probes and bodies, and every ``particle_every``-th
-output the particle cloud.
+first, then the measurements of the scene's probes and bodies (and an arrow marker per body), and
+every ``particle_every``-th output the particle cloud. Once per run (latched, and first in a
+recording): ``~/scene``, the run's description as YAML, ``~/geometry``, the scene as markers, and
+the body frames on ``/tf_static`` where tf2_msgs is installed.
 """
 import dataclasses
 import datetime
+import functools
 import platform
+import subprocess
 import time
 from importlib.metadata import version
+from pathlib import Path
 
 import numpy as np
 import yaml
+from std_msgs.msg import String
 
-from .measure.cloud import CloudPacker
+from .measure import cloud
 from .measure.suite import Measurements
-from .output import messages
+from .output import frames, markers, messages
 from .scenes.build import build_run
 
 NAMESPACE = "/sim_node"
@@ -24,6 +30,20 @@ NAMESPACE = "/sim_node"
 # offers it, the cloud with depth 1 so a slow subscriber gets the newest and no backlog
 CLOCK_QOS = {"reliable": True, "depth": 10}
 PARTICLES_QOS = {"reliable": True, "depth": 1}
+# what a subscriber that joins late still gets: the last message, kept by the publisher (/tf_static's
+# QoS in tf2)
+LATCHED_QOS = {"reliable": True, "depth": 1, "transient_local": True}
+
+
+@functools.lru_cache(maxsize=None)
+def revision() -> str:
+    """The git revision of the package's source, where it runs from a checkout."""
+    try:
+        out = subprocess.run(["git", "rev-parse", "--short=12", "HEAD"], cwd=Path(__file__).parent,
+                             capture_output=True, text=True, timeout=5)
+    except (OSError, subprocess.SubprocessError):
+        return "unknown (git not found)"
+    return out.stdout.strip() if out.returncode == 0 else "unknown (not a git checkout)"
 
 
 class Run:
@@ -36,14 +56,25 @@ class Run:
         self.model = build_run(scene, run_config)
         self.solver = self.model.solver()
         self.measurements = Measurements(self.solver, self.model)
-        self.packer = CloudPacker(self.solver)
+        self.packer = self._packer(cloud.FIELDS)
         self.cloud = messages.CloudBuilder(self.packer.fields, frame_id=frame_id)
+        cfg, world = self.model.config, self.model.scene
+        self._force_scales = {o.name: markers.force_scale(o, cfg.dim, cfg.rho0, cfg.gravity) for o in world.obstacles}
         self.next_output = 0
         self.wall = 0.0
 
     @property
     def n_outputs(self) -> int:
         return int(np.floor(self.output.end_time * self.output.output_rate + 1e-9)) + 1
+
+    def _packer(self, fields) -> cloud.CloudPacker:
+        return cloud.CloudPacker(self.solver, fields, kind=cloud.kinds(self.model.particles),
+                           turn=frames.turn(self.model.config.dim))
+
+    def kind_names(self) -> dict:
+        """What each value of the cloud's ``kind`` field stands for."""
+        names = {cloud.FLUID_KIND: "fluid", cloud.WALL_KIND: "wall"}
+        return names | {cloud.FIRST_BODY_KIND + k: f"body {name}" for name, k in self.model.bodies.items()}
 
     def set_output(self, **changes):
         """Change ``Output`` fields mid-run. A new output rate starts its grid at the next output
@@ -57,7 +88,7 @@ class Run:
         """Change the particle cloud's fields or the frame of every message."""
         self.frame_id = frame_id or self.frame_id
         if fields is not None:
-            self.packer = CloudPacker(self.solver, fields)
+            self.packer = self._packer(fields)
         self.cloud = messages.CloudBuilder(self.packer.fields, self.frame_id)
 
     def summary(self) -> str:
@@ -84,27 +115,55 @@ class Run:
             "precision": cfg.precision, "device": str(solver.device), "particles": solver.n,
             "fluid_particles": self.model.fluid_particles, "particles_order": "fluid first, then boundary",
             "bodies": yaml.safe_dump(self.model.bodies), "namespace": self.namespace, "frame_id": self.frame_id,
+            "axes": frames.AXES, "cloud_kinds": yaml.safe_dump(self.kind_names()),
             "versions": yaml.safe_dump({"gpusph_ros": version("gpusph_ros"), "warp": version("warp-lang"),
                                         "numpy": np.__version__, "python": platform.python_version()}),
+            "revision": revision(),
             "host": platform.node(), "started_utc": datetime.datetime.now(datetime.timezone.utc).isoformat(),
         }
 
+    def latched_messages(self) -> list:
+        """(topic, message) pairs sent once per run: the description, the geometry, the body frames."""
+        described = {k: (yaml.safe_load(v) if k in ("run_config", "versions", "bodies", "cloud_kinds") else v)
+                     for k, v in self.describe().items()}
+        t, world = self.solver.time, self.model.scene
+        out = [(f"{self.namespace}/scene", String(data=yaml.safe_dump(described, sort_keys=False))),
+               (f"{self.namespace}/geometry", markers.geometry(world, self.model.config.dx, self.frame_id, t))]
+        transforms = markers.body_transforms(world, self.frame_id, t)
+        if transforms is not None and world.obstacles:
+            out.append(("/tf_static", transforms))
+        return out
+
     def open_recording(self, path):
-        """A BagRecorder at ``path`` with this run's topics declared. The MCAP writer is loaded here,
-        when a recording starts: a node that never records runs without the mcap package."""
+        """A BagRecorder at ``path`` with this run's topics declared and its latched messages written.
+        The MCAP writer is loaded here, when a recording starts: a node that never records runs
+        without the mcap package."""
+        from .output import msgdefs
         from .output.recording import BagRecorder, qos_yaml
 
         recorder = BagRecorder(path, self.describe())
-        recorder.add_topic("/clock", "rosgraph_msgs/msg/Clock", qos_yaml(**CLOCK_QOS))
-        if self.output.particle_every:
-            recorder.add_topic(self.particles_topic, "sensor_msgs/msg/PointCloud2", qos_yaml(**PARTICLES_QOS))
+        try:
+            recorder.add_topic("/clock", "rosgraph_msgs/msg/Clock", qos_yaml(**CLOCK_QOS))
+            if self.output.particle_every:
+                recorder.add_topic(self.particles_topic, "sensor_msgs/msg/PointCloud2", qos_yaml(**PARTICLES_QOS))
+            for topic, msg in self.latched_messages():
+                recorder.add_topic(topic, msgdefs.type_name_of(type(msg)), qos_yaml(**LATCHED_QOS))
+                recorder.write(topic, msg, self.solver.time)
+        except BaseException:
+            recorder.close({"status": "failed: the recording could not be started"})
+            raise
         return recorder
 
     def output_messages(self, index: int) -> list:
         """(topic, message) pairs of output ``index`` at the solver's current time."""
         t = self.solver.time
         out = [("/clock", messages.clock(t))]
-        out += messages.measurement_messages(t, self.measurements.sample(), self.scene, self.namespace, self.frame_id)
+        sample = self.measurements.sample()
+        out += messages.measurement_messages(t, sample, self.scene, self.namespace, self.frame_id)
+        if self._force_scales:
+            out.append((f"{self.namespace}/bodies/force_arrows",
+                        markers.force_arrows(t, sample["wrenches"], self.model.scene, self._force_scales,
+                                             self.frame_id)))
         every = self.output.particle_every
         if every and index % every == 0:
             out.append((self.particles_topic, self.cloud.build(t, self.packer.pack())))

@@ -9,6 +9,7 @@ import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter, parameter_value_to_python
 from rclpy.parameter_client import AsyncParameterClient
+from rclpy.qos import DurabilityPolicy, QoSProfile
 from rclpy.signals import SignalHandlerOptions
 
 
@@ -43,13 +44,17 @@ class Client:
         return future.result()
 
     # -- topics ---------------------------------------------------------------------------------
-    def subscribe(self, topic, msg_type, depth=10):
+    def subscribe(self, topic, msg_type, depth=10, latched=False):
+        """Keep what ``topic`` brings; ``latched``: ask for what the publisher kept (transient local),
+        as RViz does for a map."""
         def keep(msg):
             with self._lock:
                 self.messages[topic].append(msg)
                 self.arrivals[topic].append(time.monotonic())
 
-        self.node.create_subscription(msg_type, topic, keep, depth)
+        qos = QoSProfile(depth=depth, durability=DurabilityPolicy.TRANSIENT_LOCAL if latched
+                         else DurabilityPolicy.VOLATILE)
+        self.node.create_subscription(msg_type, topic, keep, qos)
 
     def received(self, topic) -> list:
         with self._lock:

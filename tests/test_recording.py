@@ -22,6 +22,7 @@ from gpusph_ros.output import msgdefs
 from gpusph_ros.runner import Run
 from gpusph_ros.scenes.schema import load_scene
 from gpusph_ros.scenes.settings import resolve
+from gpusph_ros.sph.state import FLUID
 
 pytestmark = pytest.mark.ros
 
@@ -65,16 +66,48 @@ def test_rosbags_reads_every_topic_and_the_cloud_is_the_solver_state(recorded):
     assert topics["/sim_node/bodies/obstruction/pressure_blocks/d060mm"] == "geometry_msgs/msg/WrenchStamped"
     assert topics["/sim_node/probes/velocity"] == "geometry_msgs/msg/Vector3Stamped"
     assert topics["/sim_node/probes/D/pressure"] == "sensor_msgs/msg/FluidPressure"
-    assert set(counts.values()) == {4}
+    assert counts["/sim_node/scene"] == counts["/sim_node/geometry"] == 1
+    assert {n for t, n in counts.items() if t not in ("/sim_node/scene", "/sim_node/geometry")} == {4}
+    info = yaml.safe_load((path / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    durability = {e["topic_metadata"]["name"]: e["topic_metadata"]["offered_qos_profiles"][0]["durability"]
+                  for e in info["topics_with_message_count"]}
+    assert durability["/sim_node/geometry"] == durability["/sim_node/scene"] == "transient_local"  # latched
+    assert durability["/sim_node/particles"] == "volatile"
     assert max(stamps) == 30_000_000  # simulated time, ns
     last = clouds[-1]
-    assert [f.name for f in last.fields] == ["x", "y", "z", "vx", "vy", "vz", "density", "pressure"]
-    assert last.width == run.solver.n and last.point_step == 32
-    values = np.frombuffer(last.data.tobytes(), dtype="<f4").reshape(last.width, 8)
+    assert [f.name for f in last.fields] == ["x", "y", "z", "vx", "vy", "vz", "density", "pressure", "kind"]
+    assert last.width == run.solver.n and last.point_step == 36
+    values = np.frombuffer(last.data.tobytes(), dtype="<f4").reshape(last.width, 9)
     assert np.array_equal(values[:, 0:3], snap["pos"].astype(np.float32))
     assert np.array_equal(values[:, 3:6], snap["vel"].astype(np.float32))
     assert np.array_equal(values[:, 6], snap["rho"].astype(np.float32))
     assert np.array_equal(values[:, 7], snap["pressure"].astype(np.float32))
+    # kind: 0 fluid, 1 the tank's walls, 2 the obstruction (body 0), as the scene built them
+    parts = run.model.particles
+    expected = np.where(parts.ptype == FLUID, 0, np.where(parts.body == 0, 2, 1))
+    assert np.array_equal(values[:, 8], expected) and set(np.unique(values[:, 8])) == {0, 1, 2}
+
+
+def test_a_2d_scene_is_published_z_up(tmp_path):
+    """A 2D scene computes with y up and is published in the x-z plane (REP 103): the cloud's z is
+    the solver's y, its vz the solver's vy, y and vy are 0; a gauge's point has the level on z."""
+    scene = load_scene("lobovsky_2d")
+    run = Run(scene, resolve(scene, sets=["dx=0.02", "end_time=0.05", "output_rate=20", "particle_rate=20"]))
+    result = run.execute(run.open_recording(tmp_path / "bag"))
+    assert result["status"] == "completed"
+    snap = run.solver.snapshot()
+    with AnyReader([tmp_path / "bag"]) as reader:
+        last = [reader.deserialize(raw, c.msgtype) for c, _, raw in reader.messages()
+                if c.msgtype == "sensor_msgs/msg/PointCloud2"][-1]
+    values = np.frombuffer(last.data.tobytes(), dtype="<f4").reshape(last.width, len(last.fields))
+    assert np.array_equal(values[:, 0], snap["pos"][:, 0].astype(np.float32))
+    assert np.array_equal(values[:, 2], snap["pos"][:, 1].astype(np.float32))
+    assert np.array_equal(values[:, 5], snap["vel"][:, 1].astype(np.float32))
+    assert not values[:, 1].any() and not values[:, 4].any() and np.abs(snap["vel"][:, 1]).max() > 0.1
+    rec = read(tmp_path / "bag")
+    level = rec.topic("probes/H1")["v"][-1]
+    assert level[1] == 0.0 and 0.5 * 0.3 < level[2] < 1.5 * 0.3  # the 0.3 m column's level, on z
+    assert rec.metadata["axes"].startswith("z up")
 
 
 def test_mcap_ros2_reader_decodes_the_file_and_metadata_describes_the_run(recorded):
@@ -83,8 +116,22 @@ def test_mcap_ros2_reader_decodes_the_file_and_metadata_describes_the_run(record
     per_topic = {}
     for m in msgs:
         per_topic[m.channel.topic] = per_topic.get(m.channel.topic, 0) + 1
-    assert len(per_topic) == 10 and set(per_topic.values()) == {4}
+    latched = {"/sim_node/scene", "/sim_node/geometry"}
+    assert latched < set(per_topic) and {per_topic[t] for t in latched} == {1}
+    assert len(per_topic) == 13 and {n for t, n in per_topic.items() if t not in latched} == {4}
     sample = run.measurements.sample()
+    described = yaml.safe_load(next(m.ros_msg.data for m in msgs if m.channel.topic == "/sim_node/scene"))
+    assert described["scene_name"] == "dambreak1_thesis" and described["run_config"]["dx"] == 0.06
+    assert described["cloud_kinds"] == {0: "fluid", 1: "wall", 2: "body obstruction"}
+    geometry = next(m.ros_msg for m in msgs if m.channel.topic == "/sim_node/geometry")
+    box = next(m for m in geometry.markers if m.ns == "obstacles")
+    assert (box.pose.position.x, box.scale.x, box.scale.z) == pytest.approx((0.96, 0.12, 0.4))
+    arrow = [m.ros_msg for m in msgs if m.channel.topic.endswith("force_arrows")][-1].markers[0]
+    assert (arrow.points[0].x, arrow.points[0].y, arrow.points[0].z) == pytest.approx((0.96, 0.3, 0.2))
+    # an arrow 0.4 m long (the body's largest side) for its displaced weight, 1000 * 9.81 * 0.12^2 * 0.4 N
+    drawn = np.subtract(*[(p.x, p.y, p.z) for p in arrow.points[::-1]])
+    force = np.asarray(sample["wrenches"]["obstruction"][0])
+    assert drawn == pytest.approx(force * 0.4 / (1000 * 9.81 * 0.12 * 0.12 * 0.4), abs=1e-12)
     for topic, key in (("obstruction/wrench", "wrenches"), ("obstruction/pressure_load", "pressure_loads")):
         wrench = [m.ros_msg for m in msgs if m.channel.topic.endswith(topic)][-1]
         force, _ = sample[key]["obstruction"]
@@ -133,7 +180,8 @@ def test_killed_run_leaves_its_complete_chunks_readable(tmp_path):
     assert count > 30
     rec = read(out)
     assert not rec.complete and rec.result == {}
-    assert sum(len(s["t"]) for s in rec.series.values()) + len(rec.clouds) + len(rec.clock) == count
+    latched = 2  # the run's description and geometry, not read into series
+    assert sum(len(s["t"]) for s in rec.series.values()) + len(rec.clouds) + len(rec.clock) + latched == count
     assert (out / "metadata.yaml").is_file()
     # the documented recovery step; then rosbags and mcap's indexed reader open it whole
     fixed = subprocess.run([sys.executable, "-m", "gpusph_ros.cli", "analyze", "--repair", str(out)],

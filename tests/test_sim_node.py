@@ -15,12 +15,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
 from rosbags.highlevel import AnyReader
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import PointCloud2
+from std_msgs.msg import String
 from std_srvs.srv import SetBool, Trigger
+from visualization_msgs.msg import MarkerArray
 
 from gpusph_ros.analysis import bag as bag_reader
 from gpusph_ros.output.messages import cloud_arrays
@@ -259,14 +262,14 @@ def test_a_paused_node_steps_one_output_and_the_cloud_is_the_scene(client):
     assert reply.success and "t = 0.0000 s" in reply.message, reply.message
     cloud = client.wait_for(PARTICLES)[-1]
     assert _t(cloud.header.stamp) == 0.0 and cloud.header.frame_id == "world"
-    assert [f.name for f in cloud.fields] == ["x", "y", "z", "vx", "vy", "vz", "density", "pressure"]
+    assert [f.name for f in cloud.fields] == ["x", "y", "z", "vx", "vy", "vz", "density", "pressure", "kind"]
     model = build(load_scene("dambreak1_thesis"), dx=0.06)
     arrays = cloud_arrays(cloud)
     assert cloud.width == len(model.particles)
     pos = np.stack([arrays["x"], arrays["y"], arrays["z"]], axis=1)
     np.testing.assert_allclose(pos, model.particles.pos, atol=1e-6)  # float32 of the same fill
     wrench = client.wait_for(WRENCH)[-1]
-    assert _t(wrench.header.stamp) == 0.0
+    assert _t(wrench.header.stamp) == 0.0 and wrench.header.frame_id == "world/obstruction"
     # the obstruction stands dry at t = 0: no fluid within a kernel support, no force
     assert (wrench.wrench.force.x, wrench.wrench.force.y, wrench.wrench.force.z) == (0.0, 0.0, 0.0)
     # one more step is one output interval (100 Hz), announced on /clock
@@ -306,6 +309,21 @@ def test_pause_holds_the_simulated_time_and_resume_moves_it(client):
     assert client.call("set_paused", SetBool, data=False).success
     t0 = float(later["simulated_time"])
     _diagnostic(client, lambda s: float(s.get("simulated_time", 0)) > t0)
+
+
+def test_a_subscriber_that_joins_late_gets_the_scene_and_its_geometry(client):
+    """~/scene and ~/geometry are latched (transient local): a viewer started after the node gets
+    the run's description and the scene's markers at once, and the wrench is in the body's frame."""
+    client.subscribe("/sim_node/scene", String, latched=True)
+    client.subscribe("/sim_node/geometry", MarkerArray, latched=True)
+    described = yaml.safe_load(client.wait_for("/sim_node/scene", timeout=30.0)[-1].data)
+    assert described["scene_name"] == "dambreak1_thesis" and described["particles"] == particles("dambreak1_thesis",
+                                                                                                  0.06)
+    assert described["device"] == "cpu" and described["revision"]
+    markers = client.wait_for("/sim_node/geometry", timeout=30.0)[-1].markers
+    assert {m.ns for m in markers} >= {"tank", "obstacles", "probes", "labels"}
+    assert all(m.header.frame_id == "world" for m in markers)
+    assert client.wait_for(WRENCH)[-1].header.frame_id == "world/obstruction"
 
 
 def test_reset_into_another_built_in_scene(client):
@@ -351,7 +369,8 @@ def test_recording_toggles_and_reads_back_with_rosbags(client, tmp_path):
             if connection.topic == PARTICLES:
                 clouds.append(reader.deserialize(raw, connection.msgtype))
     assert counts["/clock"] == counts[WRENCH] == counts[PARTICLES] == 3
-    assert order[0] == "/clock"  # /clock before the outputs it stamps
+    # the run's description and geometry open the recording, then /clock before the outputs it stamps
+    assert order[:2] == ["/sim_node/scene", "/sim_node/geometry"] and order[2] == "/clock"
     assert clouds[-1].width == particles("dambreak1_thesis", 0.06)
     assert bag_reader.read(bag).result["status"] == "stopped"
     assert client.set(record_dir="")[0].successful

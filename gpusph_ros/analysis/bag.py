@@ -56,6 +56,12 @@ class Recording:
         return deserialize_message(self.clouds[k][1], PointCloud2)
 
 
+# the measurement types, read into series; the latched description, markers and frames are not
+# measurements (and tf2_msgs may be missing where the recording is read)
+MEASURED = ("geometry_msgs/msg/Vector3Stamped", "geometry_msgs/msg/PointStamped", "geometry_msgs/msg/WrenchStamped",
+            "sensor_msgs/msg/FluidPressure")
+
+
 def _values(msg) -> dict:
     """The numbers a measurement message carries."""
     kind = type(msg).__name__
@@ -92,7 +98,7 @@ def read(path) -> Recording:
                         rec.clouds.append((t, record.data))
                     elif type_name == "rosgraph_msgs/msg/Clock":
                         rec.clock.append(t)
-                    else:
+                    elif type_name in MEASURED:
                         msg = deserialize_message(record.data, _message_class(type_name))
                         rows.setdefault(topic, []).append((t, _values(msg)))
         except (McapError, EOFError, ValueError, KeyError, IndexError, struct.error) as err:

@@ -189,7 +189,8 @@ def lobovsky(rec, scene, run, data):
             row["label"] = f"{label}, {where}"
         out += rows
         curves["pressure"][k] = (t, p, exp)
-    vertical = 1 if scene.get("dim") == 2 else 2
+    # z is up in every recording that names its axes (output.frames); a 2D scene's y before
+    vertical = 1 if scene.get("dim") == 2 and "axes" not in rec.metadata else 2
     for gauge in ("H1", "H2", "H3", "H4"):
         try:
             s = rec.topic(f"probes/{gauge}")

@@ -2,52 +2,70 @@
 
 One row per particle in scene order (the order the scene built them: fluid first, then boundary;
 the solver keeps its arrays sorted into cells), excluded particles left out, columns x, y, z and
-then the chosen fields. One kernel writes the rows into a device buffer, which on a GPU is copied
-into one reusable host buffer; on the CPU the device buffer is the host buffer. No per-particle
-Python, no float64 round trip: the copy off the device is the only pass over the data before
-serialisation.
+then the chosen fields. Positions and velocities are turned by the rotation the publisher gives (a
+2D scene's vertical y onto z, ``output.frames``); ``kind`` says what a particle is (``kinds``). One
+kernel writes the rows into a device buffer, which on a GPU is copied into one reusable host buffer;
+on the CPU the device buffer is the host buffer. No per-particle Python, no float64 round trip: the
+copy off the device is the only pass over the data before serialisation.
 """
 import functools
 
 import numpy as np
 import warp as wp
 
-FIELDS = ("vx", "vy", "vz", "density", "pressure")  # what may follow x, y, z
+from ..sph.state import FLUID
+
+FIELDS = ("vx", "vy", "vz", "density", "pressure", "kind")  # what may follow x, y, z
+FLUID_KIND, WALL_KIND, FIRST_BODY_KIND = 0, 1, 2  # kind: fluid, a fixed wall, then body k as 2 + k
+
+
+def kinds(particles) -> np.ndarray:
+    """Each particle's ``kind`` (float32, scene order) from its type and body id (-1: none)."""
+    out = np.where(particles.body >= 0, FIRST_BODY_KIND + particles.body, WALL_KIND).astype(np.float32)
+    out[particles.ptype == FLUID] = FLUID_KIND
+    return out
 
 
 @functools.lru_cache(maxsize=None)
 def build(scalar):
     vec = wp.types.vector(3, scalar)
+    mat = wp.types.matrix((3, 3), scalar)
 
     @wp.func
-    def column(code: int, v: vec, rho: scalar, p: scalar):
-        # codes index FIELDS: 0-2 velocity components, 3 density, 4 pressure
-        value = p
+    def column(code: int, v: vec, rho: scalar, p: scalar, kind: wp.float32):
+        # codes index FIELDS: 0-2 velocity components, 3 density, 4 pressure, 5 kind
+        value = wp.float32(p)
         if code < 3:
-            value = v[code]
+            value = wp.float32(v[code])
         elif code == 3:
-            value = rho
-        return wp.float32(value)
+            value = wp.float32(rho)
+        elif code == 5:
+            value = kind
+        return value
 
     @wp.kernel(enable_backward=False, module="unique")
     def pack(ids: wp.array(dtype=wp.int32), pos: wp.array(dtype=vec), vel: wp.array(dtype=vec),
-             rho: wp.array(dtype=scalar), pressure: wp.array(dtype=scalar), codes: wp.array(dtype=wp.int32),
-             out: wp.array2d(dtype=wp.float32), chunk: int, stride: int):
+             rho: wp.array(dtype=scalar), pressure: wp.array(dtype=scalar), kind: wp.array(dtype=wp.float32),
+             turn: mat, codes: wp.array(dtype=wp.int32), out: wp.array2d(dtype=wp.float32), chunk: int, stride: int):
         i = wp.tid() * stride + chunk
         row = ids[i]
-        x = pos[i]
+        # + 0 turns the -0.0 that a turn's negative zero entries make of a 2D scene's z into 0.0
+        x = turn * pos[i] + vec()
         for a in range(3):
             out[row, a] = wp.float32(x[a])
+        v = turn * vel[i]
         for k in range(codes.shape[0]):
-            out[row, 3 + k] = column(codes[k], vel[i], rho[i], pressure[i])
+            out[row, 3 + k] = column(codes[k], v, rho[i], pressure[i], kind[row])
 
     return pack
 
 
 class CloudPacker:
-    """Packs ``solver``'s particles with ``fields`` (a sequence from FIELDS)."""
+    """Packs ``solver``'s particles with ``fields`` (a sequence from FIELDS); ``kind``: each
+    particle's kind in scene order (``kinds``); ``turn``: the 3x3 rotation from the solver's axes
+    to the published ones (identity by default)."""
 
-    def __init__(self, solver, fields=FIELDS):
+    def __init__(self, solver, fields=FIELDS, kind=None, turn=None):
         for name in fields:
             if name not in FIELDS:
                 raise ValueError(f"particle_fields: {name!r} is not one of {', '.join(FIELDS)}")
@@ -57,6 +75,10 @@ class CloudPacker:
         self._pack = build(solver.scalar)
         self._codes = wp.array(np.array([FIELDS.index(name) for name in fields], dtype=np.int32), dtype=wp.int32,
                                device=dev)
+        kind = np.full(solver.n, FLUID_KIND, np.float32) if kind is None else np.asarray(kind, np.float32)
+        self._kind = wp.array(kind, dtype=wp.float32, device=dev)
+        self._turn = wp.types.matrix((3, 3), solver.scalar)(*np.eye(3).ravel() if turn is None else
+                                                          np.asarray(turn, dtype=float).ravel())
         shape = (solver.n, len(self.fields))
         self._rows = wp.zeros(shape, dtype=wp.float32, device=dev)
         self._host = self._rows if dev.is_cpu else wp.zeros(shape, dtype=wp.float32, device="cpu", pinned=True)
@@ -67,7 +89,8 @@ class CloudPacker:
         s = self.solver
         s.update_pressure()
         # on every core of a CPU (the solver's launcher): a memory-bound scatter of 32 B a particle
-        s.launch(self._pack, s.n, [s.ids, s.pos, s.vel, s.rho, s.pressure, self._codes, self._rows])
+        s.launch(self._pack, s.n, [s.ids, s.pos, s.vel, s.rho, s.pressure, self._kind, self._turn, self._codes,
+                                     self._rows])
         if self._host is not self._rows:
             wp.copy(self._host, self._rows)  # into pinned memory: asynchronous until the sync below
         wp.synchronize_device(s.device)

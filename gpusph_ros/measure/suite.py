@@ -45,9 +45,7 @@ class Measurements:
         # pressure (sensors.py)
         self._wrenches, self._blocks, self._faces = {}, {}, {}
         for obstacle in scene.obstacles:
-            centre = 0.5 * (np.asarray(obstacle.lo) + np.asarray(obstacle.hi))
-            if dim == 2:
-                centre[2] = 0.0
+            centre = np.asarray(obstacle.centre(dim))
             self._wrenches[obstacle.name] = BodyWrench(solver, model.bodies[obstacle.name], centre)
             self._blocks[obstacle.name] = PressureBlockForce(solver, obstacle.lo, obstacle.hi, obstacle.block_offsets)
             pts, normals, areas = face_load_points(obstacle.lo, obstacle.hi, cfg.dx, dim, scene.tank)

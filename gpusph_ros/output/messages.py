@@ -1,8 +1,8 @@
 """Solver output to ROS messages: particle clouds, wrenches, probe values, /clock.
 
 Topic names are the node's (``/sim_node/...`` by default; the headless runner records under the
-same names, so one analysis reads both). Stamps are simulated time. Forces on bodies are about
-the body centre, in ``frame_id`` axes.
+same names, so one analysis reads both). Stamps are simulated time. Points and vectors are in the
+published axes (z up, ``frames``); a body's wrench is in its own frame, about its centre.
 """
 import array
 
@@ -11,6 +11,8 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PointStamped, Vector3Stamped, WrenchStamped
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import FluidPressure, PointCloud2, PointField
+
+from . import frames
 
 
 def stamp(t: float) -> Time:
@@ -97,33 +99,37 @@ def measurement_messages(t: float, sample: dict, scene, namespace: str = "/sim_n
     velocity at point probes (Vector3Stamped) and their pressure (FluidPressure), a wall pressure
     sensor's reading (FluidPressure), depth-averaged
     velocity (Vector3Stamped), profile points (Vector3Stamped per height, h0, h1, ...), surface
-    elevation (PointStamped at the gauge, z = elevation), the wrench on each body about its
-    centre (the net force on its particles, and the load of the wall pressure over its faces),
-    and each body's pressure-block force (WrenchStamped, force.x only)."""
+    elevation (PointStamped at the gauge, z = elevation), the wrench on each body in its frame
+    (the net force on its particles, and the load of the wall pressure over its faces), and each
+    body's pressure-block force (WrenchStamped, force.x only)."""
     out = []
     probes = f"{namespace}/probes"
+
+    def turned(values):
+        return frames.published(scene.dim, values)
+
     for name, values in sample["points"].items():
-        out.append((f"{probes}/{name}", vector(t, values["vel"], frame_id)))
+        out.append((f"{probes}/{name}", vector(t, turned(values["vel"]), frame_id)))
         out.append((f"{probes}/{name}/pressure", pressure(t, values["pressure"], frame_id)))
     for name, value in sample.get("sensors", {}).items():
         out.append((f"{probes}/{name}", pressure(t, value, frame_id)))
     for name, values in sample["columns"].items():
-        out.append((f"{probes}/{name}", vector(t, values["vel"], frame_id)))
+        out.append((f"{probes}/{name}", vector(t, turned(values["vel"]), frame_id)))
     for name, values in sample["profiles"].items():
         for k, vel in enumerate(values["vel"]):
-            out.append((f"{probes}/{name}/h{k}", vector(t, vel, frame_id)))
+            out.append((f"{probes}/{name}/h{k}", vector(t, turned(vel), frame_id)))
     up = scene.dim - 1
     positions = {p.name: p.position for p in scene.probes}
     for name, level in sample["gauges"].items():
         where = list(positions[name])
         where[up] = level
-        out.append((f"{probes}/{name}", point(t, where, frame_id)))
-    for name, (force, torque) in sample["wrenches"].items():
-        out.append((f"{namespace}/bodies/{name}/wrench", wrench(t, force, torque, frame_id)))
-    for name, (force, torque) in sample.get("pressure_loads", {}).items():
-        out.append((f"{namespace}/bodies/{name}/pressure_load", wrench(t, force, torque, frame_id)))
+        out.append((f"{probes}/{name}", point(t, turned(where), frame_id)))
+    for kind, loads in (("wrench", sample["wrenches"]), ("pressure_load", sample.get("pressure_loads", {}))):
+        for name, (force, torque) in loads.items():
+            out.append((f"{namespace}/bodies/{name}/{kind}",
+                        wrench(t, turned(force), turned(torque), frames.body_frame(frame_id, name))))
     for name, by_offset in sample["blocks"].items():
         for offset, (fx, _, _) in by_offset.items():
             out.append((f"{namespace}/bodies/{name}/pressure_blocks/{block_topic(offset)}",
-                        wrench(t, (fx, 0.0, 0.0), (0.0, 0.0, 0.0), frame_id)))
+                        wrench(t, (fx, 0.0, 0.0), (0.0, 0.0, 0.0), frames.body_frame(frame_id, name))))
     return out

@@ -137,6 +137,8 @@ class Session:
             self._cond.notify_all()
         if "particle_fields" in changes or "frame_id" in changes:
             run.set_cloud(changes.get("particle_fields"), changes.get("frame_id"))
+        if "frame_id" in changes:  # the geometry and the body frames, in the new frame
+            self._emit(run.latched_messages(), run.solver.time)
 
     def _advance(self, run):
         try:

@@ -8,10 +8,13 @@ each output goes out on the node's topics and, while recording, into a rosbag2/M
 ``autostart`` (the default) the node configures and activates itself.
 
 Topics: ``~/particles`` (PointCloud2: x, y, z, then ``particle_fields``, float32), ``~/bodies/<name>/
-wrench`` (WrenchStamped, force on the body's particles and torque about the body's centre, frame
-``frame_id``), ``~/bodies/<name>/pressure_blocks/dNNNmm`` (the thesis's pressure-block force),
-``~/probes/<name>`` (Vector3Stamped velocity, FluidPressure, PointStamped surface level), ``/clock``
-(before the outputs it stamps) and ``/diagnostics`` (1 Hz). Every stamp is simulated time.
+wrench`` (WrenchStamped, force on the body's particles and torque about the body's centre, in the
+body's frame ``<frame_id>/<name>``), ``~/bodies/force_arrows`` (markers), ``~/bodies/<name>/
+pressure_blocks/dNNNmm`` (the thesis's pressure-block force), ``~/probes/<name>`` (Vector3Stamped
+velocity, FluidPressure, PointStamped surface level), ``/clock`` (before the outputs it stamps),
+``/diagnostics`` (1 Hz), and latched (transient local) ``~/scene``, ``~/geometry`` and, where tf2_msgs
+is installed, ``/tf_static``. z is up in every scene (``output.frames``); every stamp is simulated
+time.
 Services (std_srvs): ``~/reset``, ``~/set_paused``, ``~/step``, ``~/record``.
 
 No client can stop the node: every callback (services, parameter checks, lifecycle transitions,
@@ -29,7 +32,7 @@ from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParam
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
-from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.qos_overriding_options import QoSOverridingOptions
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import PointCloud2
@@ -37,7 +40,7 @@ from std_srvs.srv import SetBool, Trigger
 
 from .. import __version__
 from ..output import messages
-from ..runner import CLOCK_QOS, PARTICLES_QOS, Run
+from ..runner import CLOCK_QOS, LATCHED_QOS, PARTICLES_QOS, Run
 from ..sph import ConfigError
 from ..sph.config import shown
 from . import node_params
@@ -47,9 +50,10 @@ from .session import Session
 STEP_WAIT = 30.0  # [s] the longest ~/step waits for its output before it answers
 
 
-def _qos(reliable: bool, depth: int) -> QoSProfile:
+def _qos(reliable: bool, depth: int, transient_local: bool = False) -> QoSProfile:
     reliability = ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT
-    return QoSProfile(depth=depth, reliability=reliability)
+    durability = DurabilityPolicy.TRANSIENT_LOCAL if transient_local else DurabilityPolicy.VOLATILE
+    return QoSProfile(depth=depth, reliability=reliability, durability=durability)
 
 
 def _service(method):
@@ -201,13 +205,17 @@ class SimNode(LifecycleNode):
     def _make_publishers(self, run):
         """One publisher per topic of the scene's outputs (found from the outputs at t = 0);
         those of the previous scene that this one lacks are removed."""
-        wanted = {topic: type(msg) for topic, msg in run.output_messages(0)}
+        latched = run.latched_messages()
+        wanted = {topic: (type(msg), 10) for topic, msg in run.output_messages(0)}
+        wanted |= {topic: (type(msg), _qos(**LATCHED_QOS)) for topic, msg in latched}
         for topic in list(self._topic_pubs):
             if topic not in self._fixed_pubs and topic not in wanted:
                 self.destroy_publisher(self._topic_pubs.pop(topic))
-        for topic, msg_type in wanted.items():
+        for topic, (msg_type, qos) in wanted.items():
             if topic not in self._topic_pubs:
-                self._topic_pubs[topic] = self.create_publisher(msg_type, topic, 10)
+                self._topic_pubs[topic] = self.create_publisher(msg_type, topic, qos)
+        for topic, msg in latched:  # a subscriber that joins later gets them from the publisher
+            self._send(self._topic_pubs[topic], msg)
 
     def _load(self) -> str:
         """Build the run from the parameters; a one-line account of it."""

@@ -50,6 +50,11 @@ class Obstacle(Box):
     block_offsets: tuple = (0.0, 0.06)
     displaces_fluid: bool = False
 
+    def centre(self, dim: int) -> tuple:
+        """The body's reference point, the centre of its box (z = 0 in 2D): its torque is about it."""
+        c = [(a + b) / 2 for a, b in zip(self.lo, self.hi)]
+        return (c[0], c[1], c[2] if dim == 3 else 0.0)
+
 
 @dataclass
 class Probe:
