@@ -60,6 +60,8 @@ class Run:
         self.cloud = messages.CloudBuilder(self.packer.fields, frame_id=frame_id)
         cfg, world = self.model.config, self.model.scene
         self._force_scales = {o.name: markers.force_scale(o, cfg.dim, cfg.rho0, cfg.gravity) for o in world.obstacles}
+        # the stamps' origin: 0, or the wall clock now (Output.stamps), the same for the whole run
+        self.time_origin_ns = time.time_ns() if self.output.stamps == "epoch" else 0
         self.next_output = 0
         self.wall = 0.0
 
@@ -68,8 +70,7 @@ class Run:
         return int(np.floor(self.output.end_time * self.output.output_rate + 1e-9)) + 1
 
     def _packer(self, fields) -> cloud.CloudPacker:
-        return cloud.CloudPacker(self.solver, fields, kind=cloud.kinds(self.model.particles),
-                           turn=frames.turn(self.model.config.dim))
+        return cloud.CloudPacker(self.solver, fields, turn=frames.turn(self.model.config.dim))
 
     def kind_names(self) -> dict:
         """What each value of the cloud's ``kind`` field stands for."""
@@ -115,6 +116,7 @@ class Run:
             "precision": cfg.precision, "device": str(solver.device), "particles": solver.n,
             "fluid_particles": self.model.fluid_particles, "particles_order": "fluid first, then boundary",
             "bodies": yaml.safe_dump(self.model.bodies), "namespace": self.namespace, "frame_id": self.frame_id,
+            "time_origin_ns": self.time_origin_ns,
             "axes": frames.AXES, "cloud_kinds": yaml.safe_dump(self.kind_names()),
             "versions": yaml.safe_dump({"gpusph_ros": version("gpusph_ros"), "warp": version("warp-lang"),
                                         "numpy": np.__version__, "python": platform.python_version()}),
@@ -132,16 +134,23 @@ class Run:
         transforms = markers.body_transforms(world, self.frame_id, t)
         if transforms is not None and world.obstacles:
             out.append(("/tf_static", transforms))
-        return out
+        return self._restamped(out, t)
 
-    def open_recording(self, path):
+    def _restamped(self, pairs: list, t: float) -> list:
+        if self.time_origin_ns:
+            for _, msg in pairs:
+                messages.restamp(msg, t, self.time_origin_ns)
+        return pairs
+
+    def open_recording(self, path, compression: str = None):
         """A BagRecorder at ``path`` with this run's topics declared and its latched messages written.
         The MCAP writer is loaded here, when a recording starts: a node that never records runs
         without the mcap package."""
         from .output import msgdefs
         from .output.recording import BagRecorder, qos_yaml
 
-        recorder = BagRecorder(path, self.describe())
+        recorder = BagRecorder(path, self.describe(), compression=compression or self.output.compression,
+                               time_origin_ns=self.time_origin_ns)
         try:
             recorder.add_topic("/clock", "rosgraph_msgs/msg/Clock", qos_yaml(**CLOCK_QOS))
             if self.output.particle_every:
@@ -167,7 +176,7 @@ class Run:
         every = self.output.particle_every
         if every and index % every == 0:
             out.append((self.particles_topic, self.cloud.build(t, self.packer.pack())))
-        return out
+        return self._restamped(out, t)
 
     def step_output(self, interrupt=None):
         """Advance to the next output time and return its messages (HealthError on failure);

@@ -156,10 +156,12 @@ def test_first_impact_integral_of_a_known_pulse():
     assert np.isnan(M.first_impact(t[:1300], p[:1300])[1])  # the record ends within the impact
 
 
-def record_synthetic_lobovsky(path, reference_data, scale):
+def record_synthetic_lobovsky(path, reference_data, scale, before_z_up=False):
     """A recording of the lobovsky_2d scene's topics at 1 kHz whose wall pressures are ``scale`` x
-    the measured event and whose water levels are the measured ones."""
+    the measured event and whose water levels are the measured ones; ``before_z_up``: as recordings
+    were made before 2D scenes were published z up (the level on y, no ``axes`` in the metadata)."""
     from gpusph_ros.analysis.reference import lobovsky_levels, lobovsky_pressures
+    from gpusph_ros.output.frames import AXES
     from gpusph_ros.output.messages import clock, measurement_messages
     from gpusph_ros.output.recording import BagRecorder
     from gpusph_ros.scenes.schema import load_scene
@@ -168,7 +170,8 @@ def record_synthetic_lobovsky(path, reference_data, scale):
     t_unit, p_unit = np.sqrt(9.81 / 0.3), 1000.0 * 9.81 * 0.3
     pressures, levels = lobovsky_pressures(reference_data), lobovsky_levels(reference_data)
     rec = BagRecorder(path, {"scene_name": scene.name, "scene": scene.text, "dx": 0.005, "kernel": "wendland",
-                             "viscosity": "artificial", "run_config": "{dx: 0.005, rho0: 1000.0}"})
+                             "viscosity": "artificial", "run_config": "{dx: 0.005, rho0: 1000.0}",
+                             **({} if before_z_up else {"axes": AXES})})
     times = np.arange(0.0, 1.3, 0.001)
     for t in times:
         ts = t * t_unit
@@ -178,9 +181,20 @@ def record_synthetic_lobovsky(path, reference_data, scale):
         sample = {"points": {}, "sensors": sensors, "columns": {}, "profiles": {}, "gauges": gauges, "wrenches": {},
                   "blocks": {}}
         for topic, msg in measurement_messages(t, sample, scene):
+            if before_z_up and hasattr(msg, "point"):
+                msg.point.y, msg.point.z = msg.point.z, 0.0
             rec.write(topic, msg, t)
     rec.close({"status": "completed", "excluded_particles": 0})
     return times * t_unit, pressures
+
+
+def test_a_2d_recording_from_before_z_up_is_read_with_its_level_on_y(tmp_path, reference_data):
+    from gpusph_ros.analysis.report import analyse
+
+    record_synthetic_lobovsky(tmp_path / "bag", reference_data, 1.0, before_z_up=True)
+    m = {row["key"]: row for row in analyse(tmp_path / "bag", reference_data)[0]["metrics"]}
+    for gauge in ("H1", "H2", "H3", "H4"):
+        assert m[f"rms_{gauge}"]["value"] < 0.005  # of H: read on y, as written
 
 
 @pytest.mark.parametrize("scale", [1.0, 1.2])

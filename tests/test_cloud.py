@@ -7,6 +7,7 @@ from gpusph_ros.measure.cloud import FIELDS, CloudPacker
 from gpusph_ros.scenes.build import build
 from gpusph_ros.scenes.schema import load_scene
 from gpusph_ros.sph import Solver
+from gpusph_ros.sph.state import FLUID
 
 pytestmark = pytest.mark.unit
 
@@ -22,7 +23,9 @@ def solver(request):
 def test_rows_are_the_snapshot_in_scene_order_as_float32(solver):
     rows = CloudPacker(solver).pack()
     snap = solver.snapshot()
-    expected = np.column_stack([snap["pos"], snap["vel"], snap["rho"], snap["pressure"]]).astype(np.float32)
+    # kind: 0 fluid, 1 a wall, 2 + k body k
+    kind = np.where(snap["ptype"] == FLUID, 0, np.where(snap["body"] >= 0, 2 + snap["body"], 1))
+    expected = np.column_stack([snap["pos"], snap["vel"], snap["rho"], snap["pressure"], kind]).astype(np.float32)
     assert rows.dtype == np.float32 and rows.shape == (solver.n, 3 + len(FIELDS))
     assert np.array_equal(rows, expected)
 
@@ -36,5 +39,5 @@ def test_a_field_subset_in_the_order_asked(solver):
 
 
 def test_an_unknown_field_is_refused_with_the_choices(solver):
-    with pytest.raises(ValueError, match="'speed' is not one of vx, vy, vz, density, pressure"):
+    with pytest.raises(ValueError, match="'speed' is not one of vx, vy, vz, density, pressure, kind"):
         CloudPacker(solver, ["speed"])

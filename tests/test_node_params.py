@@ -23,7 +23,7 @@ def test_the_issue_list_of_parameters_is_declared():
     assert names == {"scene", "dx", "kernel", "viscosity", "sps", "boundary", "density_diffusion", "precision",
                      "device", "cfl", "c0", "end_time", "output_rate", "real_time_factor", "publish_particles",
                      "particle_fields", "record_dir", "frame_id", "autostart", "model", "crop", "wall_planes",
-                     "max_excluded_fraction", "mdbc_slip", "visco_bound_factor"}
+                     "max_excluded_fraction", "mdbc_slip", "visco_bound_factor", "compression", "stamps"}
     for p in PARAMS:
         assert p.description and p.applies in (node_params.RESET, node_params.LIVE, node_params.RECORDING,
                                                node_params.STARTUP)
@@ -53,6 +53,8 @@ def test_defaults_describe_a_run():
     ({"scene": "s" * 100_000}, ["scene", "at most 4,096"]),
     ({"record_dir": "r" * 5000}, ["record_dir", "at most 4,096"]),
     ({"model": "3d"}, ["model", "full, slab, 2d"]),
+    ({"compression": "gzip"}, ["compression", "'gzip'", "zstd, lz4, none"]),
+    ({"stamps": "wall"}, ["stamps", "'wall'", "simulated, epoch"]),
     ({"model": "2d"}, ["model", "obstacles[0] (obstruction) does not span the tank's width"]),
     ({"record_dir": str(REPO / "setup.py" / "bags")}, ["record_dir", "lies under", "which is a file"]),
 ])

@@ -28,7 +28,7 @@ def mcap_file(path) -> Path:
     return files[0]
 
 
-def _message_class(type_name: str):
+def message_class(type_name: str):
     package, _, name = type_name.partition("/msg/")
     return getattr(importlib.import_module(f"{package}.msg"), name)
 
@@ -93,13 +93,14 @@ def read(path) -> Recording:
                     target.update(record.metadata)
                 elif isinstance(record, Message):
                     topic, type_name = channels[record.channel_id]
-                    t = record.log_time * 1e-9
+                    # simulated time: a run stamped with the wall clock says from when (written first)
+                    t = (record.log_time - int(rec.metadata.get("time_origin_ns", 0))) * 1e-9
                     if type_name == "sensor_msgs/msg/PointCloud2":
                         rec.clouds.append((t, record.data))
                     elif type_name == "rosgraph_msgs/msg/Clock":
                         rec.clock.append(t)
                     elif type_name in MEASURED:
-                        msg = deserialize_message(record.data, _message_class(type_name))
+                        msg = deserialize_message(record.data, message_class(type_name))
                         rows.setdefault(topic, []).append((t, _values(msg)))
         except (McapError, EOFError, ValueError, KeyError, IndexError, struct.error) as err:
             if not schemas and not rec.metadata:  # nothing of a recording before the error

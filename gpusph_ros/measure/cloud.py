@@ -3,7 +3,7 @@
 One row per particle in scene order (the order the scene built them: fluid first, then boundary;
 the solver keeps its arrays sorted into cells), excluded particles left out, columns x, y, z and
 then the chosen fields. Positions and velocities are turned by the rotation the publisher gives (a
-2D scene's vertical y onto z, ``output.frames``); ``kind`` says what a particle is (``kinds``). One
+2D scene's vertical y onto z, ``output.frames``); ``kind`` says what a particle is (fluid, wall, body). One
 kernel writes the rows into a device buffer, which on a GPU is copied into one reusable host buffer;
 on the CPU the device buffer is the host buffer. No per-particle Python, no float64 round trip: the
 copy off the device is the only pass over the data before serialisation.
@@ -19,17 +19,19 @@ FIELDS = ("vx", "vy", "vz", "density", "pressure", "kind")  # what may follow x,
 FLUID_KIND, WALL_KIND, FIRST_BODY_KIND = 0, 1, 2  # kind: fluid, a fixed wall, then body k as 2 + k
 
 
-def kinds(particles) -> np.ndarray:
-    """Each particle's ``kind`` (float32, scene order) from its type and body id (-1: none)."""
-    out = np.where(particles.body >= 0, FIRST_BODY_KIND + particles.body, WALL_KIND).astype(np.float32)
-    out[particles.ptype == FLUID] = FLUID_KIND
-    return out
-
-
 @functools.lru_cache(maxsize=None)
 def build(scalar):
     vec = wp.types.vector(3, scalar)
     mat = wp.types.matrix((3, 3), scalar)
+
+    @wp.func
+    def kind_of(ptype: int, body: int):
+        kind = FLUID_KIND
+        if ptype != FLUID:
+            kind = WALL_KIND
+            if body >= 0:
+                kind = FIRST_BODY_KIND + body
+        return wp.float32(kind)
 
     @wp.func
     def column(code: int, v: vec, rho: scalar, p: scalar, kind: wp.float32):
@@ -45,8 +47,9 @@ def build(scalar):
 
     @wp.kernel(enable_backward=False, module="unique")
     def pack(ids: wp.array(dtype=wp.int32), pos: wp.array(dtype=vec), vel: wp.array(dtype=vec),
-             rho: wp.array(dtype=scalar), pressure: wp.array(dtype=scalar), kind: wp.array(dtype=wp.float32),
-             turn: mat, codes: wp.array(dtype=wp.int32), out: wp.array2d(dtype=wp.float32), chunk: int, stride: int):
+             rho: wp.array(dtype=scalar), pressure: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
+             body: wp.array(dtype=wp.int32), turn: mat, codes: wp.array(dtype=wp.int32),
+             out: wp.array2d(dtype=wp.float32), chunk: int, stride: int):
         i = wp.tid() * stride + chunk
         row = ids[i]
         # + 0 turns the -0.0 that a turn's negative zero entries make of a 2D scene's z into 0.0
@@ -55,17 +58,17 @@ def build(scalar):
             out[row, a] = wp.float32(x[a])
         v = turn * vel[i]
         for k in range(codes.shape[0]):
-            out[row, 3 + k] = column(codes[k], v, rho[i], pressure[i], kind[row])
+            out[row, 3 + k] = column(codes[k], v, rho[i], pressure[i], kind_of(ptype[i], body[i]))
 
     return pack
 
 
 class CloudPacker:
-    """Packs ``solver``'s particles with ``fields`` (a sequence from FIELDS); ``kind``: each
-    particle's kind in scene order (``kinds``); ``turn``: the 3x3 rotation from the solver's axes
-    to the published ones (identity by default)."""
+    """Packs ``solver``'s particles with ``fields`` (a sequence from FIELDS); ``turn``: the 3x3
+    rotation from the solver's axes to the published ones (identity by default). ``kind`` is
+    FLUID_KIND, WALL_KIND, or FIRST_BODY_KIND + the particle's body id."""
 
-    def __init__(self, solver, fields=FIELDS, kind=None, turn=None):
+    def __init__(self, solver, fields=FIELDS, turn=None):
         for name in fields:
             if name not in FIELDS:
                 raise ValueError(f"particle_fields: {name!r} is not one of {', '.join(FIELDS)}")
@@ -75,8 +78,6 @@ class CloudPacker:
         self._pack = build(solver.scalar)
         self._codes = wp.array(np.array([FIELDS.index(name) for name in fields], dtype=np.int32), dtype=wp.int32,
                                device=dev)
-        kind = np.full(solver.n, FLUID_KIND, np.float32) if kind is None else np.asarray(kind, np.float32)
-        self._kind = wp.array(kind, dtype=wp.float32, device=dev)
         self._turn = wp.types.matrix((3, 3), solver.scalar)(*np.eye(3).ravel() if turn is None else
                                                           np.asarray(turn, dtype=float).ravel())
         shape = (solver.n, len(self.fields))
@@ -89,7 +90,7 @@ class CloudPacker:
         s = self.solver
         s.update_pressure()
         # on every core of a CPU (the solver's launcher): a memory-bound scatter of 32 B a particle
-        s.launch(self._pack, s.n, [s.ids, s.pos, s.vel, s.rho, s.pressure, self._kind, self._turn, self._codes,
+        s.launch(self._pack, s.n, [s.ids, s.pos, s.vel, s.rho, s.pressure, s.ptype, s.body, self._turn, self._codes,
                                      self._rows])
         if self._host is not self._rows:
             wp.copy(self._host, self._rows)  # into pinned memory: asynchronous until the sync below

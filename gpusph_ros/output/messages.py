@@ -15,10 +15,31 @@ from sensor_msgs.msg import FluidPressure, PointCloud2, PointField
 from . import frames
 
 
-def stamp(t: float) -> Time:
-    """Simulated time [s] as builtin_interfaces/Time."""
-    ns = int(round(t * 1e9))
+def stamp(t: float, origin_ns: int = 0) -> Time:
+    """Simulated time [s] as builtin_interfaces/Time, counted from ``origin_ns`` [ns]."""
+    ns = origin_ns + int(round(t * 1e9))
     return Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
+
+
+def _stamps(msg):
+    """The stamps a message carries: its header's, a clock's, or those of the items it lists."""
+    if hasattr(msg, "header"):
+        return [msg.header]
+    if hasattr(msg, "clock"):
+        return [msg]
+    items = getattr(msg, "markers", None) or getattr(msg, "transforms", None) or []
+    return [item.header for item in items]
+
+
+def restamp(msg, t: float, origin_ns: int):
+    """``msg`` (built at simulated time ``t``) with every stamp counted from ``origin_ns`` instead
+    of 0: the outputs of a run stamped with the wall clock of its start."""
+    for holder in _stamps(msg):
+        if hasattr(holder, "clock"):
+            holder.clock = stamp(t, origin_ns)
+        else:
+            holder.stamp = stamp(t, origin_ns)
+    return msg
 
 
 def clock(t: float) -> Clock:

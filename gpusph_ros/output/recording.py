@@ -33,6 +33,7 @@ from rclpy.serialization import serialize_message
 from . import msgdefs
 
 CHUNK_SIZE = 1 << 20
+COMPRESSION = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
 FLUSH_EVERY = 1.0  # [s] of wall clock: the most a killed recording loses
 # A recording never fills its disk: before each message it checks that the open chunk, the message,
 # the summary and footer a clean close writes, and SPACE_MARGIN still fit, and otherwise closes
@@ -88,9 +89,11 @@ class _FlushingFile:
 
 
 class BagRecorder:
-    """Writes (topic, message, time) into a new bag directory ``path``."""
+    """Writes (topic, message, time) into a new bag directory ``path``, its chunks compressed with
+    ``compression`` (COMPRESSION), each message logged at ``time_origin_ns`` plus its time."""
 
-    def __init__(self, path, metadata: dict, chunk_size: int = CHUNK_SIZE):
+    def __init__(self, path, metadata: dict, chunk_size: int = CHUNK_SIZE, compression: str = "zstd",
+                 time_origin_ns: int = 0):
         self.path = Path(path)
         if self.path.exists() and any(self.path.iterdir()):
             raise FileExistsError(f"record_dir: {self.path} exists and is not empty; choose a new directory")
@@ -105,12 +108,13 @@ class BagRecorder:
         self.path.mkdir(parents=True, exist_ok=True)
         self.file_name = f"{self.path.name}_0.mcap"
         self._chunk_size = chunk_size
-        self._pending = 0  # bytes of messages in the open chunk
+        self._origin = int(time_origin_ns)
+        self._pending = 0  # bytes of messages in the open chunk (its compressed size is at most that)
         self._chunks = 0
         self._summary_fixed = 2048 + sum(len(k) + len(v) + 32 for k, v in meta.items())
         try:
             self._stream = _FlushingFile(self.path / self.file_name)
-            self._writer = Writer(self._stream, chunk_size=chunk_size, compression=CompressionType.NONE)
+            self._writer = Writer(self._stream, chunk_size=chunk_size, compression=COMPRESSION[compression])
             self._writer.start(profile="ros2", library=f"gpusph_ros {version('gpusph_ros')}; mcap {version('mcap')}")
             self._writer.add_metadata("gpusph_ros", meta)
             self._schemas, self._channels, self._topics = {}, {}, {}
@@ -142,7 +146,7 @@ class BagRecorder:
             raise DiskFull(f"{self.path}: the recording was closed (its disk is full)")
         if topic not in self._channels:
             self.add_topic(topic, msgdefs.type_name_of(type(message)), qos_yaml())
-        ns = int(round(t * 1e9))
+        ns = self._origin + int(round(t * 1e9))
         entry = self._topics[topic]
         data = serialize_message(message) if data is None else data
         need = self._pending + len(data) + MESSAGE_OVERHEAD + self._summary_bytes() + SPACE_MARGIN
@@ -224,10 +228,11 @@ def write_metadata_yaml(path: Path, file_name: str, topics: dict, count: int, fi
     tmp.replace(path / "metadata.yaml")
 
 
-def repair(path) -> dict:
+def repair(path, compression: str = "zstd") -> dict:
     """Rebuild a killed recording's MCAP summary and footer from its complete chunks, in place
-    (the cut file is kept beside it as ``<file>.cut``), and its metadata.yaml. Returns what was
-    found: repaired (False for a whole file, left as it is), messages and topics recovered."""
+    (the cut file is kept beside it as ``<file>.cut``, its chunks written again with
+    ``compression``), and its metadata.yaml. Returns what was found: repaired (False for a whole
+    file, left as it is), messages and topics recovered."""
     path = Path(path)
     files = sorted(path.glob("*.mcap")) if path.is_dir() else []
     if not files:
@@ -242,7 +247,7 @@ def repair(path) -> dict:
     topics, count, first, last = {}, 0, None, None
     schemas, channels, result = {}, {}, False
     with open(cut, "rb") as f, open(source, "wb") as out:
-        writer = Writer(out, chunk_size=CHUNK_SIZE, compression=CompressionType.NONE)
+        writer = Writer(out, chunk_size=CHUNK_SIZE, compression=COMPRESSION[compression])
         try:
             for record in StreamReader(f).records:
                 if isinstance(record, Header):

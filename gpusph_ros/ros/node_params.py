@@ -13,7 +13,7 @@ from ..measure.cloud import FIELDS as PARTICLE_FIELDS
 from ..output.folders import folder_problem
 from ..scenes.reduce import MODELS
 from ..scenes.schema import MAX_PATH, builtin_names, load_scene
-from ..scenes.settings import resolve
+from ..scenes.settings import COMPRESSIONS, STAMPS, resolve
 from ..sph.config import LIVE, RESET, ConfigError, SolverConfig
 
 # when a change takes effect: RESET (needs new particles or buffers: at the next ~/reset) and LIVE
@@ -78,7 +78,12 @@ PARAMS = (
           + ", ".join(PARTICLE_FIELDS), LIVE, choices=PARTICLE_FIELDS),
     Param("record_dir", "", "folder that recordings (rosbag2 + MCAP, one sub-folder each) go to; empty = no "
           "recording", RECORDING),
-    Param("frame_id", "world", "frame of every published message", LIVE),
+    Param("compression", "zstd", "a recording's MCAP chunk compression: zstd (as ros2 bag record -s mcap), lz4 "
+          "(faster, larger) or none", RECORDING, choices=COMPRESSIONS),
+    Param("stamps", "simulated", "what the stamps count: simulated (seconds from 0) or epoch (the simulated time "
+          "added to the wall clock at the run's start, for viewers that show dates)", RESET, choices=STAMPS),
+    Param("frame_id", "world", "the world frame (z up) of every message; a body's wrench is in <frame_id>/<body>",
+          LIVE),
     Param("autostart", True, "configure and activate the (lifecycle) node at start-up", STARTUP),
 )
 BY_NAME = {p.name: p for p in PARAMS}
@@ -168,6 +173,7 @@ def run_settings(values: dict):
     """(scene, RunConfig) of the parameter ``values``; ConfigError when they make no run."""
     scene = load_scene(values["scene"])
     output = {k: values[k] for k in ("end_time", "output_rate") if values[k] > 0.0}
+    output |= {k: values[k] for k in ("compression", "stamps")}
     numerics = {p.name: values[p.name] for p in SOLVER_PARAMS}
     numerics["viscosity"] = "sps" if values["sps"] else values["viscosity"]
     reduction = {k: values[k] for k in ("model", "crop", "wall_planes")}

@@ -311,14 +311,15 @@ class Session:
         self.stop_recording(status)
 
     # -- recording -----------------------------------------------------------------------------
-    def start_recording(self, directory) -> Path:
-        """Start a new bag under ``directory`` (``<scene>_<UTC time>``); returns its path."""
+    def start_recording(self, directory, compression: str = None) -> Path:
+        """Start a new bag under ``directory`` (``<scene>_<UTC time>``), its chunks compressed with
+        ``compression`` (the run's own by default); returns its path."""
         with self._record_lock:
             if self.recorder is not None:
                 return self.recorder.path
             run = self.run
             stamp = datetime.datetime.now(datetime.timezone.utc).strftime("%Y_%m_%d-%H_%M_%S_%f")
-            self.recorder = run.open_recording(Path(directory).expanduser() / f"{run.scene.name}_{stamp}")
+            self.recorder = run.open_recording(Path(directory).expanduser() / f"{run.scene.name}_{stamp}", compression)
             return self.recorder.path
 
     def stop_recording(self, status: str):

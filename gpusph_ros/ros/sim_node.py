@@ -229,12 +229,15 @@ class SimNode(LifecycleNode):
             self.get_logger().warning(f"scene: {warning}")
         return text
 
+    def _start_recording(self, directory):
+        return self.session.start_recording(directory, self.value("compression"))
+
     def _maybe_record(self) -> str:
         directory = self.value("record_dir")
         if not directory or self.session.run is None:
             return ""
         try:
-            return f"; recording to {self.session.start_recording(directory)}"
+            return f"; recording to {self._start_recording(directory)}"
         except OSError as err:  # checked when set, but a folder can go away or fill up
             return f"; not recording: cannot write under {directory} ({err.strerror or err})"
 
@@ -357,7 +360,7 @@ class SimNode(LifecycleNode):
             response.success, response.message = False, "no scene is loaded: configure the node (or call ~/reset)"
         else:
             try:
-                response.success, response.message = True, f"recording to {self.session.start_recording(directory)}"
+                response.success, response.message = True, f"recording to {self._start_recording(directory)}"
             except OSError as err:
                 response.success, response.message = False, f"cannot record to {directory}: {err}"
         return response

@@ -23,6 +23,8 @@ MIN_OUTPUT_RATE = 1.0e-3  # [Hz] simulated: an output every 1000 s at least (a d
 # [s] simulated: a day of flow is beyond any case here (a tank's sloshing decays in minutes) and would
 # run for years on a CPU; 1 microsecond is a few steps
 MIN_END_TIME, MAX_END_TIME = 1.0e-6, 1.0e5
+COMPRESSIONS = ("zstd", "lz4", "none")
+STAMPS = ("simulated", "epoch")
 NUMERIC_FIELDS = tuple(f.name for part in (Numerics, HealthLimits) for f in settings_of(part))
 
 
@@ -34,6 +36,12 @@ class Output:
     end_time: float = 1.0  # [s] simulated
     output_rate: float = 100.0  # [Hz] simulated (the thesis's DamBreak 1 rate)
     particle_rate: float = 10.0  # [Hz] simulated
+    # a recording's MCAP chunk compression: zstd is what `ros2 bag record -s mcap` writes by default,
+    # lz4 is faster to write and larger, none the largest
+    compression: str = "zstd"
+    # what a message's stamp counts: simulated seconds from 0 (1970 in a viewer), or that time added
+    # to the wall clock at the start of the run (UTC epoch), for tools that show dates
+    stamps: str = "simulated"
 
     @property
     def particle_every(self) -> int:
@@ -127,6 +135,9 @@ def resolve(scene: Scene, files=(), sets=(), **overrides) -> RunConfig:
     if not (math.isfinite(rate) and (rate == 0.0 or MIN_OUTPUT_RATE <= rate <= output.output_rate)):
         raise ConfigError("particle_rate", rate, f"0 (no particle clouds) or a rate in [{MIN_OUTPUT_RATE:g}, "
                                                  f"output_rate = {output.output_rate:g}] Hz")
+    for key, choices in (("compression", COMPRESSIONS), ("stamps", STAMPS)):
+        if getattr(output, key) not in choices:
+            raise ConfigError(key, getattr(output, key), "one of " + ", ".join(choices))
     reduction = Reduction(**{k: merged.pop(k) for k in REDUCTION_FIELDS if k in merged}).validate()
     numerics = {k: merged[k] for k in NUMERIC_FIELDS if k in merged}
     cfg = SolverConfig(dim=scene.dim, gravity=scene.gravity, depth=scene.depth, periodic=scene.periodic,
