@@ -23,7 +23,7 @@ setup(
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
-        *share_files('config', 'data'),
+        *share_files('config', 'data', 'launch', 'rviz', 'foxglove'),
     ],
     install_requires=['setuptools'],
     zip_safe=True,

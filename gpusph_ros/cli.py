@@ -105,6 +105,9 @@ def analyze_main(argv=None):
     parser.add_argument("--reference", help="a reference folder laid out as the package's data/ "
                                             "(default: the package's own)")
     parser.add_argument("--no-charts", action="store_true")
+    parser.add_argument("--export", metavar="DIR",
+                        help="write the simulated and measured series on the recording's clock as CSV, and the "
+                             "measured ones as a bag of /reference/... topics, into DIR; then stop")
     parser.add_argument("--repair", action="store_true",
                         help="rebuild a killed recording's index (summary, footer, metadata.yaml) from its complete "
                              "chunks, so rosbags and mcap open it; then stop")
@@ -115,6 +118,8 @@ def analyze_main(argv=None):
         return _repair(args.recording)
     from .analysis import report as R
 
+    if args.export:
+        return _export(args.recording, args.export, args.reference)
     if (Path(args.recording) / "results.csv").is_file():
         return _analyze_study(Path(args.recording))
     recording = Path(args.recording)
@@ -134,6 +139,22 @@ def analyze_main(argv=None):
     print(f"\nmetrics: {path}" + ("".join(f"\nchart: {w}" for w in written)))
     if not rep["complete"]:
         print("note: the recording ends mid-file (a killed run); metrics cover what it holds")
+    return 0
+
+
+def _export(recording, out, reference) -> int:
+    from pathlib import Path
+
+    from .analysis.export import export
+
+    try:
+        done = export(recording, out, Path(reference) if reference else None)
+    except (OSError, KeyError, ValueError) as err:
+        print(f"gpusph-analyze: --export: {err}", file=sys.stderr)
+        return 1
+    for path in done["csv"]:
+        print(f"csv: {path}")
+    print(f"reference bag: {done['bag']} (" + ", ".join(f"{t} {n}" for t, n in done["topics"].items()) + ")")
     return 0
 
 

@@ -1,4 +1,6 @@
 """The thesis's metrics (Section 4) on series with known answers."""
+from pathlib import Path
+
 import numpy as np
 import pytest
 import yaml
@@ -223,3 +225,70 @@ def test_lobovsky_report_of_the_measured_series_scaled(tmp_path, reference_data,
     assert "first-impact pressure-time integral, sensor 1, 3 mm" in text and "no particle excluded" in text
     assert {p.rsplit("/", 1)[-1] for p in charts(report, curves, tmp_path / "charts")} >= {"pressure.png",
                                                                                           "levels.png"}
+
+
+def test_export_puts_the_measured_series_on_the_recording_clock_as_csv_and_mcap(tmp_path, reference_data):
+    """gpusph-analyze --export of a Lobovsky recording whose pressures are 1.2 x the measured ones
+    and whose levels are the measured ones: each CSV's simulated column is 1.2 x (1 x) its measured
+    column, and rosbags reads the measured points back from the reference bag in SI units."""
+    import csv
+    import subprocess
+    import sys
+
+    from rosbags.highlevel import AnyReader
+
+    from gpusph_ros.analysis.reference import lobovsky_pressures
+
+    record_synthetic_lobovsky(tmp_path / "bag", reference_data, 1.2)
+    out = subprocess.run([sys.executable, "-m", "gpusph_ros.cli", "analyze", str(tmp_path / "bag"), "--export",
+                          str(tmp_path / "export"), "--reference", str(reference_data)],
+                         capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stdout + out.stderr
+    for name, ratio in (("sensor_1", 1.2), ("sensor_4", 1.2), ("H1", 1.0), ("H4", 1.0)):
+        with open(tmp_path / "export" / f"{name}.csv") as f:
+            assert f.readline().startswith("# simulated: ")
+            rows = [r for r in csv.DictReader(f) if r[next(k for k in r if k.startswith("measured"))]]
+        sim, meas = (np.array([float(r[k]) for r in rows]) for k in rows[0] if k != "time_s")
+        assert len(rows) > 500 and np.abs(meas).max() > 0
+        np.testing.assert_allclose(sim, ratio * meas, rtol=1e-6, atol=1e-6 * np.abs(meas).max())
+    t_unit, p_unit = np.sqrt(9.81 / 0.3), 1000.0 * 9.81 * 0.3
+    t_exp, p_exp = lobovsky_pressures(reference_data)[1]
+    with AnyReader([tmp_path / "export" / "reference"]) as reader:
+        topics = {c.topic: c.msgtype for c in reader.connections}
+        assert topics["/reference/lobovsky_2014/sensor_1"] == "sensor_msgs/msg/FluidPressure"
+        assert topics["/reference/lobovsky_2014/H2"] == "geometry_msgs/msg/PointStamped"
+        got = [(t * 1e-9, reader.deserialize(raw, c.msgtype).fluid_pressure) for c, t, raw in reader.messages()
+               if c.topic == "/reference/lobovsky_2014/sensor_1"]
+    assert len(got) == len(t_exp)
+    np.testing.assert_allclose([t for t, _ in got], np.sort(t_exp) / t_unit, atol=1e-9)
+    np.testing.assert_allclose([p for _, p in got], p_exp[np.argsort(t_exp, kind="stable")] * p_unit, rtol=1e-12)
+
+
+def test_export_of_dambreak1_moves_the_measurement_by_the_analysis_alignment(tmp_path, reference_data):
+    """The Yeh & Petroff force and velocity go onto the recording's clock moved by what the analysis
+    moved the simulated curve by, stated in the CSV."""
+    from rosbags.highlevel import AnyReader
+
+    from gpusph_ros.analysis import report
+    from gpusph_ros.analysis.export import export
+    from gpusph_ros.analysis.reference import experiment_series
+    from gpusph_ros.runner import Run
+    from gpusph_ros.scenes.schema import load_scene
+    from gpusph_ros.scenes.settings import resolve
+
+    scene = load_scene("dambreak1_thesis")
+    run = Run(scene, resolve(scene, sets=["dx=0.06", "end_time=0.1", "particle_rate=0"]))
+    run.execute(run.open_recording(tmp_path / "db1"))
+    _, curves = report.analyse(tmp_path / "db1", reference_data)
+    done = export(tmp_path / "db1", tmp_path / "export", reference_data)
+    assert {Path(p).name for p in done["csv"]} == {"velocity.csv", "force.csv"}
+    shift = curves["shift"]["peak_force_body"]
+    header = (tmp_path / "export" / "force.csv").read_text().splitlines()[0]
+    assert f"moved by {-shift:+.4f} s" in header
+    t_exp, f_exp = experiment_series(reference_data, "force")
+    with AnyReader([Path(done["bag"])]) as reader:
+        got = [(t * 1e-9, reader.deserialize(raw, c.msgtype).wrench.force.x) for c, t, raw in reader.messages()
+               if c.topic == "/reference/yeh_petroff/force"]
+    kept = t_exp - shift >= 0.0  # the points before the recording's t = 0 are left out
+    assert len(got) == kept.sum() > 10
+    np.testing.assert_allclose(sorted(t for t, _ in got), np.sort(t_exp[kept] - shift), atol=1e-9)

@@ -1,4 +1,5 @@
 """The ament_python package: manifest, install layout, entry point, and the import direction."""
+import ast
 import subprocess
 import sys
 from pathlib import Path
@@ -22,6 +23,29 @@ def test_package_xml_is_a_valid_format_3_ament_python_manifest():
             "diagnostic_msgs"} <= deps
 
 
+def _ros_imports(folder: Path) -> set:
+    """The ROS packages the Python under ``folder`` imports: rclpy, ament_index_python, launch and
+    launch_ros, and every <pkg> of a <pkg>.msg / <pkg>.srv import."""
+    found = set()
+    for path in folder.rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = [node.module] if isinstance(node, ast.ImportFrom) and node.module else (
+                [a.name for a in node.names] if isinstance(node, ast.Import) else [])
+            for name in names:
+                top, _, rest = name.partition(".")
+                if top in ("rclpy", "ament_index_python", "launch", "launch_ros") or rest.split(".")[0] in ("msg",
+                                                                                                        "srv"):
+                    found.add(top)
+    return found
+
+
+def test_package_xml_declares_every_ros_package_the_code_and_launch_files_import():
+    deps = {d.name for d in parse_package(str(REPO / "package.xml")).exec_depends}
+    used = _ros_imports(REPO / "gpusph_ros") | _ros_imports(REPO / "launch")
+    assert {"rclpy", "tf2_msgs", "visualization_msgs", "launch_ros"} <= used
+    assert used <= deps, sorted(used - deps)
+
+
 def test_setup_installs_the_ament_marker_manifest_and_config(tmp_path):
     out = subprocess.run([sys.executable, "setup.py", "--quiet", "install", "--root", str(tmp_path),
                           "--prefix", "/p", "--single-version-externally-managed",
@@ -31,7 +55,8 @@ def test_setup_installs_the_ament_marker_manifest_and_config(tmp_path):
     prefix = tmp_path / "p"
     assert (prefix / "share/ament_index/resource_index/packages/gpusph_ros").is_file()
     assert (prefix / "share/gpusph_ros/package.xml").is_file()
-    for cfg in (*(REPO / "config").rglob("*"), *(REPO / "data").rglob("*")):
+    for cfg in (*(REPO / "config").rglob("*"), *(REPO / "data").rglob("*"), *(REPO / "launch").rglob("*"),
+                *(REPO / "rviz").rglob("*"), *(REPO / "foxglove").rglob("*")):
         if cfg.is_file():
             assert (prefix / "share/gpusph_ros" / cfg.relative_to(REPO)).is_file(), cfg
     assert (prefix / "lib/gpusph_ros/sim_node").is_file()

@@ -195,6 +195,9 @@ def test_colcon_lists_an_ament_python_package_and_installs_the_index_and_executa
     assert exe.is_file() and os.access(exe, os.X_OK)
     for cfg in ("sim_node.yaml", "params/dambreak1_thesis.yaml", "params/collapse_2d.yaml"):
         assert (prefix / "share/gpusph_ros/config" / cfg).is_file(), cfg
+    # what `ros2 launch gpusph_ros sim.launch.py`, RViz's -d and Foxglove's layout import look for
+    for shared in ("launch/sim.launch.py", "launch/sim.launch.xml", "rviz/sim.rviz", "foxglove/sim.json"):
+        assert (prefix / "share/gpusph_ros" / shared).read_bytes() == (REPO / shared).read_bytes(), shared
 
 
 def test_ros2_run_lookup_finds_the_installed_executable(workspace, sourced):

@@ -83,6 +83,8 @@ def dambreak1(rec, meta, data, scenario, dx, same_case):
                            gp("dambreak1_velocity_rms.csv", "rms_error_m_s"),
                            note="experimental scatter 0.39 m/s"))
     curves["velocity"] = (t_al, u, exp_v)
+    # what each curve's time was moved by to put its peak on the measured one (export.py undoes it)
+    curves["shift"] = {"velocity": float(t_al[0] - t[0]) if len(t) else 0.0}
     exp_f = R.experiment_series(data, "force")
     f_ref = M.peak(*M.moving_average(*exp_f))[0] if exp_f else 0.0
     f_exp_peak = R.experiment_value(data, "dambreak1", "peak_force_on_obstruction")
@@ -94,6 +96,7 @@ def dambreak1(rec, meta, data, scenario, dx, same_case):
         measured peak for the curves) and, with ``rms_key``, its RMS error against the measurement."""
         tf, f = M.moving_average(*_x(rec.topic(topic), "force"))
         forces[key] = (M.align_to(tf, f, f_ref), f)
+        curves["shift"][key] = float(forces[key][0][0] - tf[0]) if len(tf) else 0.0
         out.append(_metric(key, M.peak(tf, f)[1], f_exp_peak, gpusph, note=note))
         if rms_key and exp_f:
             out.append(_metric(rms_key, M.rms_error(*forces[key], *exp_f), None, rms_gpusph,
@@ -200,6 +203,7 @@ def lobovsky(rec, scene, run, data):
         exp = exp_h.get(gauge)
         out.append(_metric(f"rms_{gauge}", M.rms_error(t, h, *exp) if exp else None))
         curves["levels"][gauge] = (t, h, exp)
+    curves["units"] = {"time": t_unit, "pressure": p_unit, "depth": depth}  # what the curves are divided by
     return out, {"lobovsky": curves}
 
 
