@@ -25,7 +25,10 @@ setup(
         ('share/' + package_name, ['package.xml']),
         *share_files('config', 'data', 'launch', 'rviz', 'foxglove'),
     ],
-    install_requires=['setuptools'],
+    # what pip installs beside the package: the PyPI-only dependencies and the Python ones that a ROS
+    # install has from apt (package.xml names those, and the ROS packages, for rosdep); requirements.txt
+    # pins the versions tested
+    install_requires=['setuptools', 'numpy', 'PyYAML', 'warp-lang', 'mcap'],
     zip_safe=True,
     maintainer='gpusph_ros maintainers',
     maintainer_email='maintainers@gpusph-ros.dev',
