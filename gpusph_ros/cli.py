@@ -18,24 +18,41 @@ import threading
 import time
 
 
-def _progress(run, stream=sys.stdout):
-    """One progress line per call, rewritten in place on a terminal."""
-    solver, end = run.solver, run.output.end_time
-    frac = min(1.0, solver.time / end)
-    bar = "#" * int(30 * frac) + "." * (30 - int(30 * frac))
-    rate = solver.steps / max(run.wall, 1e-9)
-    eta = run.wall / max(frac, 1e-9) * (1.0 - frac)
-    line = (f"[{bar}] t = {solver.time:7.3f} / {end:g} s  {solver.steps:7d} steps  {rate:6.1f} steps/s  "
-            f"{run.mipps():5.3f} MIPPS  ETA {eta:6.0f} s")
-    if solver.excluded_particles:
-        line += f"  excluded {solver.excluded_particles} ({solver.excluded_fraction:.3%})"
-    tty = stream.isatty()
-    last = run.done
-    # off a terminal, print about every 5% so logs stay short
-    step = max(1, run.n_outputs // 20)
-    if tty or last or run.next_output % step == 0:
-        stream.write(("\r" if tty else "") + line + ("\n" if (last or not tty) else ""))
-        stream.flush()
+class Progress:
+    """A run's progress as tqdm draws it: simulated time against the end time, the elapsed wall time
+    and the ETA, then steps, steps/s, MIPPS and the excluded particles. On a terminal one bar is
+    redrawn in place; elsewhere (a log) a line is written about every 5% of the run."""
+
+    FORMAT = "{l_bar}{bar}| t = {n:.3f} / {total:g} s [{elapsed}, ETA {remaining}{postfix}]"
+
+    def __init__(self, run, stream=sys.stdout):
+        from tqdm import tqdm
+
+        self.tty = stream.isatty()
+        self.stream = stream
+        self.bar = tqdm(total=run.output.end_time, file=stream, bar_format=self.FORMAT, dynamic_ncols=True,
+                        ascii=not self.tty, disable=not self.tty, leave=True)
+        self.every = max(1, run.n_outputs // 20)
+        self.start = time.perf_counter()
+
+    def postfix(self, run) -> str:
+        s = run.solver
+        text = f"{s.steps} steps, {s.steps / max(run.wall, 1e-9):.1f} steps/s, {run.mipps():.3f} MIPPS"
+        return text + (f", excluded {s.excluded_particles} ({s.excluded_fraction:.3%})" if s.excluded_particles
+                       else "")
+
+    def __call__(self, run):
+        t, end = min(run.solver.time, run.output.end_time), run.output.end_time
+        if self.tty:
+            self.bar.n = t
+            self.bar.set_postfix_str(self.postfix(run), refresh=True)
+            if run.done:
+                self.bar.close()
+        elif run.done or run.next_output % self.every == 0:
+            line = self.bar.format_meter(t, end, time.perf_counter() - self.start, ncols=100,
+                                         bar_format=self.FORMAT, postfix=self.postfix(run), ascii=True)
+            self.stream.write(line + "\n")
+            self.stream.flush()
 
 
 def _at_least_one(text: str) -> int:
@@ -89,7 +106,7 @@ def run_main(argv=None):
     stop = threading.Event()
     signal.signal(signal.SIGTERM, lambda signum, frame: stop.set())
     start = time.perf_counter()
-    result = run.execute(recorder, progress=None if args.quiet else _progress, stop=stop.is_set)
+    result = run.execute(recorder, progress=None if args.quiet else Progress(run), stop=stop.is_set)
     print(f"{result['status']}: {result['steps']} steps, t = {result['simulated_time_s']:.4g} s, wall "
           f"{time.perf_counter() - start:.1f} s, {result['mipps']} MIPPS; {R.excluded_line(result)}; recorded "
           f"{recorder.count} messages to {args.out}", flush=True)

@@ -121,8 +121,8 @@ PYPI = {"rclpy": "ros-jazzy-rclpy[fastrtps]", "builtin_interfaces": "ros-jazzy-r
         "geometry_msgs": "ros-jazzy-common-interfaces", "std_msgs": "ros-jazzy-common-interfaces",
         "std_srvs": "ros-jazzy-common-interfaces", "diagnostic_msgs": "ros-jazzy-common-interfaces",
         "visualization_msgs": "ros-jazzy-common-interfaces", "python3-numpy": "numpy", "python3-yaml": "PyYAML",
-        "python3-matplotlib": "matplotlib", "tf2_msgs": None, "ament_index_python": None, "launch": None,
-        "launch_ros": None, "launch_xml": None, "rviz2": None}
+        "python3-matplotlib": "matplotlib", "python3-tqdm": "tqdm", "tf2_msgs": None, "ament_index_python": None,
+        "launch": None, "launch_ros": None, "launch_xml": None, "rviz2": None}
 
 
 def test_a_clean_venv_from_the_declarations_alone_starts_the_node_and_records(tmp_path):
