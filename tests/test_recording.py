@@ -345,3 +345,17 @@ def test_a_real_small_file_system_fills_and_the_recording_stays_readable(tmp_pat
         assert read(mount / "bag").complete
     finally:
         subprocess.run(["umount", str(mount)], capture_output=True)
+
+
+def test_each_body_frame_is_on_tf_static_where_tf2_msgs_is_installed():
+    """On a ROS 2 install (tf2_msgs has no PyPI wheel, so not in this venv) the run's latched messages
+    include /tf_static with world/<body> at the body's centre, the frame its wrench is in."""
+    pytest.importorskip("tf2_msgs.msg")
+    scene = load_scene("dambreak1_thesis")
+    run = Run(scene, resolve(scene, sets=["dx=0.06", "end_time=0.01"]))
+    transforms = dict(run.latched_messages())["/tf_static"].transforms
+    assert [t.child_frame_id for t in transforms] == ["world/obstruction"]
+    assert transforms[0].header.frame_id == "world"
+    moved = transforms[0].transform.translation
+    assert (moved.x, moved.y, moved.z) == pytest.approx((0.96, 0.3, 0.2))
+    assert transforms[0].transform.rotation.w == 1.0
