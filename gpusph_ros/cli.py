@@ -68,48 +68,74 @@ def _at_least_one(text: str) -> int:
 
 def run_main(argv=None):
     parser = argparse.ArgumentParser(prog="gpusph-run", description="Run a scene headless and record it to MCAP.")
-    parser.add_argument("scene", help="built-in scene name or path to a scene YAML file")
+    parser.add_argument("scene", nargs="?", help="built-in scene name or path to a scene YAML file")
     parser.add_argument("--run-config", action="append", default=[], metavar="NAME|FILE",
                         help="run configuration(s), later ones winning (e.g. thesis_scenario1)")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override one run setting")
-    parser.add_argument("--out", required=True, help="bag directory to create (must not exist or be empty)")
+    parser.add_argument("--out", help="bag directory to create (must not exist or be empty)")
+    parser.add_argument("--resume", metavar="DIR", help="continue the run recorded in DIR from its last checkpoint "
+                        "(written every checkpoint_interval of wall time and when the run is stopped)")
     parser.add_argument("--quiet", action="store_true", help="no progress output")
     args = parser.parse_args(argv)
+    if bool(args.resume) == bool(args.scene or args.out or args.set or args.run_config):
+        parser.error("give a scene and --out (and settings), or --resume DIR alone (it runs as the run it continues "
+                     "was invoked)")
+    if not args.resume and not (args.scene and args.out):
+        parser.error("a new run needs a scene and --out")
 
     import warp as wp
 
     wp.config.log_level = wp.LOG_WARNING  # no per-module load lines
     from .analysis import report as R
     from .output.folders import folder_problem
-    from .runner import Run
+    from .runner import Checkpoints, Run, resume
     from .scenes.schema import load_scene
     from .scenes.settings import resolve
     from .sph import ConfigError
 
-    problem = folder_problem(args.out, empty=True)
+    out = args.resume or args.out
+    problem = None if args.resume else folder_problem(args.out, empty=True)
     if problem:
         print(f"gpusph-run: --out: {args.out!r} cannot be written: {problem}", file=sys.stderr)
         return 1
     try:
-        scene = load_scene(args.scene)
-        config = resolve(scene, files=args.run_config, sets=args.set)
-        run = Run(scene, config)
-        recorder = run.open_recording(args.out)
+        if args.resume:
+            run, recorder, invocation = resume(args.resume)
+        else:
+            invocation = {"scene": args.scene, "run_config": args.run_config, "sets": args.set}
+            scene = load_scene(args.scene)
+            run = Run(scene, resolve(scene, files=args.run_config, sets=args.set))
+            recorder = run.open_recording(args.out)
     except (ConfigError, FileExistsError, ValueError, OSError) as err:
         print(f"gpusph-run: {err}", file=sys.stderr)
         return 1
-    for warning in scene.warnings:
+    for warning in run.scene.warnings:
         print(f"gpusph-run: warning: {warning}", file=sys.stderr)
-    print(f"{run.summary()} -> {args.out}", flush=True)
-    # SIGTERM only asks the run to stop between two steps: an exception raised wherever the
-    # signal lands (inside the MCAP writer, say) could leave the recording unclosable
+    print(f"{run.summary()} -> {out}" + (f" (resumed at t = {run.solver.time:.4g} s)" if args.resume else ""),
+          flush=True)
+    # SIGTERM and Ctrl-C only ask the run to stop between two steps (a second Ctrl-C stops it at
+    # once): an exception raised wherever the signal lands (inside the MCAP writer, say) could leave
+    # the recording unclosable and the state half-stepped
     stop = threading.Event()
-    signal.signal(signal.SIGTERM, lambda signum, frame: stop.set())
+
+    def ask_to_stop(signum, frame):
+        if signum == signal.SIGINT and stop.is_set():
+            raise KeyboardInterrupt
+        stop.set()
+
+    signal.signal(signal.SIGTERM, ask_to_stop)
+    signal.signal(signal.SIGINT, ask_to_stop)
+    checkpoints = Checkpoints(out, invocation, recorder, run.output.checkpoint_interval)
     start = time.perf_counter()
-    result = run.execute(recorder, progress=None if args.quiet else Progress(run), stop=stop.is_set)
+    result = run.execute(recorder, progress=None if args.quiet else Progress(run), stop=stop.is_set,
+                         checkpoints=checkpoints if run.output.checkpoint_interval else None)
     print(f"{result['status']}: {result['steps']} steps, t = {result['simulated_time_s']:.4g} s, wall "
           f"{time.perf_counter() - start:.1f} s, {result['mipps']} MIPPS; {R.excluded_line(result)}; recorded "
-          f"{recorder.count} messages to {args.out}", flush=True)
+          f"{recorder.count} messages to {out}", flush=True)
+    if result["status"] == "completed":
+        checkpoints.remove()
+    elif result["status"] == "interrupted" and run.output.checkpoint_interval and not run.torn:
+        print(f"checkpoint: {checkpoints.write(run)}; continue with gpusph-run --resume {out}", flush=True)
     return 0 if result["status"] == "completed" else 2
 
 
@@ -257,7 +283,7 @@ def sweep_main(argv=None):
 def plan_main(argv=None):
     parser = argparse.ArgumentParser(prog="gpusph-plan", description="Particles, device memory, steps and wall time "
                                      "of a run, from a short calibration run on its device.")
-    parser.add_argument("scene", help="built-in scene name or path to a scene YAML file")
+    parser.add_argument("scene", nargs="?", help="built-in scene name or path to a scene YAML file")
     parser.add_argument("--run-config", action="append", default=[], metavar="NAME|FILE")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     parser.add_argument("--calibration-steps", type=_at_least_one, default=30,

@@ -24,6 +24,7 @@ from .measure import cloud
 from .measure.suite import Measurements
 from .output import frames, markers, messages
 from .scenes.build import build_run
+from .sph import checkpoint
 
 NAMESPACE = "/sim_node"
 # QoS the node offers and the recording states (rosbag2 replays with it): /clock as Gazebo's bridge
@@ -33,6 +34,7 @@ PARTICLES_QOS = {"reliable": True, "depth": 1}
 # what a subscriber that joins late still gets: the last message, kept by the publisher (/tf_static's
 # QoS in tf2)
 LATCHED_QOS = {"reliable": True, "depth": 1, "transient_local": True}
+CHECKPOINT_FORMAT = 1
 
 
 @functools.lru_cache(maxsize=None)
@@ -64,6 +66,7 @@ class Run:
         self.time_origin_ns = time.time_ns() if self.output.stamps == "epoch" else 0
         self.next_output = 0
         self.wall = 0.0
+        self.torn = False  # a Ctrl-C landed inside a step: no checkpoint of this state
 
     @property
     def n_outputs(self) -> int:
@@ -142,15 +145,37 @@ class Run:
                 messages.restamp(msg, t, self.time_origin_ns)
         return pairs
 
-    def open_recording(self, path, compression: str = None):
-        """A BagRecorder at ``path`` with this run's topics declared and its latched messages written.
-        The MCAP writer is loaded here, when a recording starts: a node that never records runs
-        without the mcap package."""
+    # -- checkpoints ---------------------------------------------------------------------------
+    def checkpoint(self) -> dict:
+        """All a resumed run needs to go on as this one would (sph/checkpoint.py): the solver's state,
+        the outputs done, the wall time so far, the stamps' origin and the output settings. Taken
+        between two steps: a run interrupted by ``stop`` is whole, one cut by Ctrl-C mid-step
+        (``torn``) is not and refuses."""
+        if self.torn:
+            raise RuntimeError("checkpoint: the run was stopped in the middle of a step (Ctrl-C); its state "
+                               "is not whole")
+        return {"format": CHECKPOINT_FORMAT, "solver": checkpoint.capture(self.solver),
+                "next_output": self.next_output, "wall": self.wall, "time_origin_ns": self.time_origin_ns,
+                "output": dataclasses.asdict(self.output)}
+
+    def restore(self, state: dict):
+        """Continue from ``checkpoint()`` of a run of the same scene and settings."""
+        if state.get("format") != CHECKPOINT_FORMAT:
+            raise ValueError(f"checkpoint: format {state.get('format')!r}, this version reads {CHECKPOINT_FORMAT}")
+        checkpoint.restore(self.solver, state["solver"])
+        self.next_output, self.wall = state["next_output"], state["wall"]
+        self.time_origin_ns = state["time_origin_ns"]
+        self.output = dataclasses.replace(self.output, **state["output"])
+
+    def open_recording(self, path, compression: str = None, earlier: list = None):
+        """A BagRecorder at ``path`` with this run's topics declared and its latched messages written
+        (``earlier``: the files of the bag a resumed run continues). The MCAP writer is loaded here,
+        when a recording starts: a node that never records runs without the mcap package."""
         from .output import msgdefs
         from .output.recording import BagRecorder, qos_yaml
 
         recorder = BagRecorder(path, self.describe(), compression=compression or self.output.compression,
-                               time_origin_ns=self.time_origin_ns)
+                               time_origin_ns=self.time_origin_ns, earlier=earlier)
         try:
             recorder.add_topic("/clock", "rosgraph_msgs/msg/Clock", qos_yaml(**CLOCK_QOS))
             if self.output.particle_every:
@@ -201,11 +226,12 @@ class Run:
     def mipps(self) -> float:
         return self.solver.n * self.solver.steps / max(self.wall, 1e-9) / 1e6
 
-    def execute(self, recorder=None, progress=None, stop=None) -> dict:
+    def execute(self, recorder=None, progress=None, stop=None, checkpoints=None) -> dict:
         """Run to the end time, recording each output; returns the result record (status,
         wall time, steps, MIPPS). A HealthError or a neighbour-list overflow ends the run with
         status 'failed'; Ctrl-C, or ``stop`` (a callable asked between steps) answering true, with
-        'interrupted'. The recording is closed either way."""
+        'interrupted'. The recording is closed either way. ``checkpoints(run)`` is called after each
+        output (it decides whether one is due)."""
         status = "completed"
         try:
             while not self.done:
@@ -216,6 +242,8 @@ class Run:
                 for topic, msg in msgs:
                     if recorder is not None:
                         recorder.write(topic, msg, self.solver.time)
+                if checkpoints is not None:
+                    checkpoints(self)
                 if progress is not None:
                     progress(self)
         except RuntimeError as err:  # a health check, a neighbour-list overflow, a clock stuck below float64's step
@@ -223,7 +251,7 @@ class Run:
         except OSError as err:  # the recording's disk is full (it closed itself, readable) or went away
             status = f"failed: the recording could not be written: {err.strerror or err}"
         except KeyboardInterrupt:
-            status = "interrupted"
+            status, self.torn = "interrupted", True
         result = self.result(status)
         if recorder is not None:
             recorder.close(result)
@@ -242,3 +270,79 @@ class Run:
         return {"status": status, "wall_time_s": round(self.wall, 3), "steps": self.solver.steps,
                 "simulated_time_s": self.solver.time, "mipps": round(self.mipps(), 4), "outputs": self.next_output,
                 **self.exclusions(), **self.solver.health_peaks}
+
+
+CHECKPOINT_FILE = "checkpoint.pkl"
+
+
+class Checkpoints:
+    """A recorded run's checkpoints, in its bag folder (``checkpoint.pkl``): the run's state
+    (``Run.checkpoint``), what rebuilds it (``invocation``: scene, run configurations, settings) and
+    how much of the recording it accounts for. Written every ``interval`` seconds of wall clock at
+    an output (the recording's open chunk closed first, so that the file on disk holds every message
+    the checkpoint counts) and by ``write``; replaced whole, never half-written."""
+
+    def __init__(self, folder, invocation: dict, recorder, interval: float):
+        self.path = Path(folder) / CHECKPOINT_FILE
+        self.invocation, self.recorder, self.interval = invocation, recorder, interval
+        self._last = time.monotonic()
+
+    def __call__(self, run):
+        if self.interval and time.monotonic() - self._last >= self.interval:
+            self.write(run)
+
+    def write(self, run) -> Path:
+        import pickle
+
+        self.recorder.flush()
+        state = {"invocation": self.invocation, "run": run.checkpoint(),
+                 "recording": {"file": self.recorder.file_name, "messages": self.recorder.count}}
+        tmp = self.path.with_suffix(".tmp")
+        with open(tmp, "wb") as f:
+            pickle.dump(state, f, protocol=pickle.HIGHEST_PROTOCOL)
+        tmp.replace(self.path)
+        self._last = time.monotonic()
+        return self.path
+
+    def remove(self):
+        self.path.unlink(missing_ok=True)
+
+
+def resume(folder):
+    """(run, recorder, invocation) continuing the recorded run in ``folder`` from its checkpoint:
+    the run rebuilt as it was invoked and restored; the recording's file the checkpoint counted
+    cut back to what it counted (a killed run wrote on after it), any later file set aside as
+    ``.superseded``, and a new file ``<name>_<k>.mcap`` opened after them. ValueError when there is
+    nothing to resume."""
+    import pickle
+
+    from .output.recording import bag_files, file_entries, is_whole, repair
+    from .scenes.schema import load_scene
+    from .scenes.settings import resolve
+
+    folder = Path(folder)
+    path = folder / CHECKPOINT_FILE
+    if not path.is_file():
+        raise ValueError(f"--resume: {folder} has no {CHECKPOINT_FILE}: not a run stopped before its end (a "
+                         "completed run removes it; checkpoint_interval 0 writes none)")
+    try:
+        with open(path, "rb") as f:
+            state = pickle.load(f)
+        invocation, recording = state["invocation"], state["recording"]
+    except Exception as err:  # a cut or foreign file: said, never a traceback
+        raise ValueError(f"--resume: {path} cannot be read ({type(err).__name__}: {err})") from None
+    scene = load_scene(invocation["scene"])
+    run = Run(scene, resolve(scene, files=invocation["run_config"], sets=invocation["sets"]))
+    run.restore(state["run"])
+    files = bag_files(folder)
+    names = [f.name for f in files]
+    if recording["file"] not in names:
+        raise ValueError(f"--resume: {folder} lacks {recording['file']}, the file its checkpoint counts")
+    counted = names.index(recording["file"])
+    for later in files[counted + 1:]:
+        later.replace(later.with_name(later.name + ".superseded"))
+    whole = is_whole(files[counted])
+    if not whole or file_entries(folder, counted + 1)[-1]["count"] != recording["messages"]:
+        repair(folder, run.output.compression, keep=recording["messages"])
+    recorder = run.open_recording(folder, earlier=file_entries(folder))
+    return run, recorder, invocation

@@ -17,15 +17,21 @@ from mcap.stream_reader import StreamReader
 from rclpy.serialization import deserialize_message
 
 
-def mcap_file(path) -> Path:
-    """The .mcap file of a bag directory (or the file itself)."""
+def mcap_files(path) -> list:
+    """The .mcap files of a bag directory in their order (a resumed run adds <name>_1, ...), or
+    the file itself."""
     path = Path(path)
     if path.is_file():
-        return path
-    files = sorted(path.glob("*.mcap"))
+        return [path]
+
+    def index(p):
+        tail = p.stem.rpartition("_")[2]
+        return (int(tail) if tail.isdigit() else -1, p.name)
+
+    files = sorted(path.glob("*.mcap"), key=index)
     if not files:
         raise FileNotFoundError(f"{path}: no .mcap file here; expected a recording made by gpusph-run or sim_node")
-    return files[0]
+    return files
 
 
 def message_class(type_name: str):
@@ -77,10 +83,10 @@ def _values(msg) -> dict:
     return {}
 
 
-def read(path) -> Recording:
-    rec = Recording()
-    schemas, channels, rows = {}, {}, {}
-    with open(mcap_file(path), "rb") as stream:
+def _read_file(file, rec: Recording, rows: dict):
+    """Read one MCAP file's records into ``rec`` and ``rows`` (topic -> [(t, values)])."""
+    schemas, channels = {}, {}
+    with open(file, "rb") as stream:
         try:
             for record in StreamReader(stream).records:
                 if isinstance(record, Schema):
@@ -89,8 +95,10 @@ def read(path) -> Recording:
                     channels[record.id] = (record.topic, schemas[record.schema_id])
                     rec.types[record.topic] = schemas[record.schema_id]
                 elif isinstance(record, Metadata):
-                    target = rec.result if record.name == "gpusph_ros.result" else rec.metadata
-                    target.update(record.metadata)
+                    if record.name == "gpusph_ros.result":
+                        rec.result = dict(record.metadata)  # a later file's (a resumed run's) wins
+                    else:
+                        rec.metadata.update(record.metadata)
                 elif isinstance(record, Message):
                     topic, type_name = channels[record.channel_id]
                     # simulated time: a run stamped with the wall clock says from when (written first)
@@ -104,10 +112,18 @@ def read(path) -> Recording:
                         rows.setdefault(topic, []).append((t, _values(msg)))
         except (McapError, EOFError, ValueError, KeyError, IndexError, struct.error) as err:
             if not schemas and not rec.metadata:  # nothing of a recording before the error
-                raise ValueError(f"{path}: not a recording made by gpusph-run or sim_node (no MCAP records: "
+                raise ValueError(f"{file}: not a recording made by gpusph-run or sim_node (no MCAP records: "
                                  f"{type(err).__name__})") from None
             rec.complete = False
             rec.metadata.setdefault("read_error", f"the file ends mid-record ({type(err).__name__}): a killed run")
+
+
+def read(path) -> Recording:
+    """Every file of the recording at ``path``, in order: a resumed run's files continue the first."""
+    rec = Recording()
+    rows = {}
+    for file in mcap_files(path):
+        _read_file(file, rec, rows)
     for key in ("run_config", "versions", "bodies"):
         if key in rec.metadata:
             rec.metadata[key] = yaml.safe_load(rec.metadata[key])

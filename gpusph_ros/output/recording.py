@@ -93,9 +93,12 @@ class BagRecorder:
     ``compression`` (COMPRESSION), each message logged at ``time_origin_ns`` plus its time."""
 
     def __init__(self, path, metadata: dict, chunk_size: int = CHUNK_SIZE, compression: str = "zstd",
-                 time_origin_ns: int = 0):
+                 time_origin_ns: int = 0, earlier: list = None):
+        """``earlier``: the bag's files so far (``file_entries``) when a resumed run continues it in
+        a file of its own, ``<name>_<k>.mcap``; else the folder must be new or empty."""
         self.path = Path(path)
-        if self.path.exists() and any(self.path.iterdir()):
+        self._earlier = list(earlier or [])
+        if not self._earlier and self.path.exists() and any(self.path.iterdir()):
             raise FileExistsError(f"record_dir: {self.path} exists and is not empty; choose a new directory")
         meta = {k: str(v) for k, v in metadata.items()}
         existing = next(q for q in [self.path, *self.path.parents] if q.exists())
@@ -106,7 +109,7 @@ class BagRecorder:
                            f"at least {need:,} to start")
         created = not self.path.exists()
         self.path.mkdir(parents=True, exist_ok=True)
-        self.file_name = f"{self.path.name}_0.mcap"
+        self.file_name = f"{self.path.name}_{len(self._earlier)}.mcap"
         self._chunk_size = chunk_size
         self._origin = int(time_origin_ns)
         self._pending = 0  # bytes of messages in the open chunk (its compressed size is at most that)
@@ -193,15 +196,63 @@ class BagRecorder:
         self.closed = True
         self._write_metadata_yaml()
 
+    def entry(self) -> dict:
+        """This file's entry for metadata.yaml (as ``file_entries`` gives an earlier file's)."""
+        return {"path": self.file_name, "topics": self._topics, "count": self.count, "first": self.first,
+                "last": self.last}
+
     def _write_metadata_yaml(self):
-        write_metadata_yaml(self.path, self.file_name, self._topics, self.count, self.first, self.last)
+        write_metadata_yaml(self.path, [*self._earlier, self.entry()])
 
 
-def write_metadata_yaml(path: Path, file_name: str, topics: dict, count: int, first, last):
-    """rosbag2's metadata.yaml for one MCAP file in the bag ``path``; ``topics``: name -> {type,
-    qos (YAML text), count}; ``first``/``last``: the earliest and latest log times [ns]."""
-    start = first or 0
-    duration = (last - first) if count else 0
+def bag_files(path) -> list:
+    """The MCAP files of the bag directory ``path`` in their order (<name>_0, _1, ...)."""
+    def index(p):
+        tail = p.stem.rpartition("_")[2]
+        return (int(tail) if tail.isdigit() else -1, p.name)
+    return sorted(Path(path).glob("*.mcap"), key=index)
+
+
+def file_entries(path, upto: int = None) -> list:
+    """metadata.yaml entries of the bag's MCAP files (the first ``upto``; all whole), read from
+    their summaries."""
+    from mcap.reader import make_reader
+
+    out = []
+    for file in bag_files(path)[:upto]:
+        with open(file, "rb") as f:
+            summary = make_reader(f).get_summary()
+        stats = summary.statistics
+        topics = {}
+        for cid, channel in summary.channels.items():
+            topics[channel.topic] = {"type": summary.schemas[channel.schema_id].name,
+                                     "qos": channel.metadata.get("offered_qos_profiles", qos_yaml()),
+                                     "count": stats.channel_message_counts.get(cid, 0)}
+        count = stats.message_count
+        out.append({"path": file.name, "topics": topics, "count": count,
+                    "first": stats.message_start_time if count else None,
+                    "last": stats.message_end_time if count else None})
+    return out
+
+
+def write_metadata_yaml(path: Path, files: list):
+    """rosbag2's metadata.yaml for the bag ``path`` and its MCAP ``files``, each {path, topics:
+    name -> {type, qos (YAML text), count}, count, first, last (the earliest and latest log times,
+    ns)}."""
+    topics = {}
+    for f in files:
+        for topic, e in f["topics"].items():
+            topics.setdefault(topic, {**e, "count": 0})["count"] += e["count"]
+    count = sum(f["count"] for f in files)
+    firsts = [f["first"] for f in files if f["count"]]
+    lasts = [f["last"] for f in files if f["count"]]
+    start = min(firsts) if firsts else 0
+    duration = (max(lasts) - start) if firsts else 0
+
+    def span(f):
+        return {"starting_time": {"nanoseconds_since_epoch": f["first"] or 0},
+                "duration": {"nanoseconds": (f["last"] - f["first"]) if f["count"] else 0}}
+
     info = {
         "version": 9,
         "storage_identifier": "mcap",
@@ -217,9 +268,8 @@ def write_metadata_yaml(path: Path, file_name: str, topics: dict, count: int, fi
             for topic, e in topics.items()],
         "compression_format": "",
         "compression_mode": "",
-        "relative_file_paths": [file_name],
-        "files": [{"path": file_name, "starting_time": {"nanoseconds_since_epoch": start},
-                   "duration": {"nanoseconds": duration}, "message_count": count}],
+        "relative_file_paths": [f["path"] for f in files],
+        "files": [{"path": f["path"], **span(f), "message_count": f["count"]} for f in files],
         "custom_data": {},
         "ros_distro": "jazzy",
     }
@@ -228,20 +278,27 @@ def write_metadata_yaml(path: Path, file_name: str, topics: dict, count: int, fi
     tmp.replace(path / "metadata.yaml")
 
 
-def repair(path, compression: str = "zstd") -> dict:
+def is_whole(file) -> bool:
+    """Whether an MCAP file was finished (it ends with the magic after its footer)."""
+    file = Path(file)
+    with open(file, "rb") as f:
+        f.seek(max(0, file.stat().st_size - len(MCAP0_MAGIC)))
+        return f.read() == MCAP0_MAGIC
+
+
+def repair(path, compression: str = "zstd", keep: int = None) -> dict:
     """Rebuild a killed recording's MCAP summary and footer from its complete chunks, in place
-    (the cut file is kept beside it as ``<file>.cut``, its chunks written again with
-    ``compression``), and its metadata.yaml. Returns what was found: repaired (False for a whole
-    file, left as it is), messages and topics recovered."""
+    (the bag's last file; the cut file is kept beside it as ``<file>.cut``, its chunks written
+    again with ``compression``; with ``keep``, whole or not, only its first ``keep`` messages, those
+    a checkpoint counted), and its metadata.yaml. Returns what was found: repaired (False for a whole file,
+    left as it is), messages and topics recovered."""
     path = Path(path)
-    files = sorted(path.glob("*.mcap")) if path.is_dir() else []
+    files = bag_files(path) if path.is_dir() else []
     if not files:
         raise FileNotFoundError(f"{path}: no .mcap file here; expected a bag directory")
-    source = files[0]
-    with open(source, "rb") as f:  # a finished file ends with the magic after its footer
-        f.seek(max(0, source.stat().st_size - len(MCAP0_MAGIC)))
-        if f.read() == MCAP0_MAGIC:
-            return {"repaired": False, "file": str(source)}
+    source = files[-1]
+    if keep is None and is_whole(source):
+        return {"repaired": False, "file": str(source)}
     cut = source.with_name(source.name + ".cut")
     source.replace(cut)
     topics, count, first, last = {}, 0, None, None
@@ -265,6 +322,8 @@ def repair(path, compression: str = "zstd") -> dict:
                     result |= record.name == "gpusph_ros.result"
                     writer.add_metadata(record.name, record.metadata)
                 elif isinstance(record, Message):
+                    if keep is not None and count >= keep:
+                        break
                     cid, topic = channels[record.channel_id]
                     writer.add_message(cid, log_time=record.log_time, publish_time=record.publish_time,
                                        data=record.data, sequence=record.sequence)
@@ -277,6 +336,8 @@ def repair(path, compression: str = "zstd") -> dict:
         if not result:
             writer.add_metadata("gpusph_ros.result", {"status": f"killed: repaired, {count} messages recovered"})
         writer.finish()
-    write_metadata_yaml(path, source.name, topics, count, first, last)
+    write_metadata_yaml(path, [*file_entries(path, len(files) - 1), {"path": source.name, "topics": topics,
+                                                                      "count": count, "first": first, "last": last}])
     return {"repaired": True, "file": str(source), "cut_file": str(cut), "messages": count,
             "topics": {name: e["count"] for name, e in topics.items()}}
+

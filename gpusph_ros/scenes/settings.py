@@ -42,6 +42,9 @@ class Output:
     # what a message's stamp counts: simulated seconds from 0 (1970 in a viewer), or that time added
     # to the wall clock at the start of the run (UTC epoch), for tools that show dates
     stamps: str = "simulated"
+    # [s] of wall clock between two checkpoints of a recorded gpusph-run (and one when it is stopped),
+    # from which `gpusph-run --resume` continues; 0 = none
+    checkpoint_interval: float = 600.0
 
     @property
     def particle_every(self) -> int:
@@ -135,6 +138,9 @@ def resolve(scene: Scene, files=(), sets=(), **overrides) -> RunConfig:
     if not (math.isfinite(rate) and (rate == 0.0 or MIN_OUTPUT_RATE <= rate <= output.output_rate)):
         raise ConfigError("particle_rate", rate, f"0 (no particle clouds) or a rate in [{MIN_OUTPUT_RATE:g}, "
                                                  f"output_rate = {output.output_rate:g}] Hz")
+    if not (math.isfinite(output.checkpoint_interval) and 0.0 <= output.checkpoint_interval <= MAX_END_TIME):
+        raise ConfigError("checkpoint_interval", output.checkpoint_interval,
+                          f"a wall time in [0, {MAX_END_TIME:g}] s (0: no checkpoints)")
     for key, choices in (("compression", COMPRESSIONS), ("stamps", STAMPS)):
         if getattr(output, key) not in choices:
             raise ConfigError(key, getattr(output, key), "one of " + ", ".join(choices))

@@ -1,0 +1,108 @@
+"""Checkpoint and resume (`gpusph-run --resume DIR`): a run stopped, or killed, and resumed records
+what the same run never stopped records, bit for bit on the CPU, and its bag (files _0, _1, ...)
+reads whole with rosbags and the analysis."""
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from rosbags.highlevel import AnyReader
+
+from gpusph_ros.analysis.bag import read
+from gpusph_ros.output.messages import cloud_arrays
+from gpusph_ros.runner import CHECKPOINT_FILE, Checkpoints, Run, resume
+from gpusph_ros.scenes.schema import load_scene
+from gpusph_ros.scenes.settings import resolve
+
+pytestmark = pytest.mark.ros
+
+REPO = Path(__file__).resolve().parents[1]
+SETS = ["dx=0.004", "end_time=0.3", "particle_rate=50"]  # collapse_2d: 927 particles, about 1,650 steps
+
+
+def _same_recordings(a, b):
+    """Every measurement, clock tick and cloud of recording ``a`` is in ``b``, equal; ``b`` may hold
+    the latched messages once more (a resumed file opens with them)."""
+    ra, rb = read(a), read(b)
+    assert rb.complete and rb.result["status"] == ra.result["status"] == "completed"
+    assert rb.result["steps"] == ra.result["steps"]
+    assert set(ra.series) == set(rb.series)
+    for topic, series in ra.series.items():
+        for key, values in series.items():
+            assert np.array_equal(values, rb.series[topic][key]), (topic, key)
+    assert ra.clock == rb.clock
+    assert [t for t, _ in ra.clouds] == [t for t, _ in rb.clouds]
+    for k in range(len(ra.clouds)):
+        ca, cb = cloud_arrays(ra.cloud(k)), cloud_arrays(rb.cloud(k))
+        assert all(np.array_equal(ca[f], cb[f]) for f in ca), k
+    return ra, rb
+
+
+def test_a_run_stopped_between_steps_and_resumed_equals_one_never_stopped(tmp_path):
+    scene = load_scene("collapse_2d")
+    whole = Run(scene, resolve(scene, sets=SETS))
+    whole.execute(whole.open_recording(tmp_path / "whole"))
+    invocation = {"scene": "collapse_2d", "run_config": [], "sets": SETS}
+    first = Run(scene, resolve(scene, sets=SETS))
+    recorder = first.open_recording(tmp_path / "stopped")
+    asked = {"n": 0}
+
+    def stop():  # between two steps, 700 steps in, inside an output interval
+        asked["n"] += 1
+        return asked["n"] > 700
+
+    assert first.execute(recorder, stop=stop)["status"] == "interrupted"
+    assert 0.0 < first.solver.time < 0.3
+    Checkpoints(tmp_path / "stopped", invocation, recorder, 0.0).write(first)
+    second, recorder, _ = resume(tmp_path / "stopped")
+    assert second.solver.time == first.solver.time and second.next_output == first.next_output
+    assert second.execute(recorder)["status"] == "completed"
+    a, b = whole.solver.snapshot(), second.solver.snapshot()
+    assert all(np.array_equal(a[k], b[k]) for k in a)  # the final state, bit for bit
+    _same_recordings(tmp_path / "whole", tmp_path / "stopped")
+    assert sorted(p.name for p in (tmp_path / "stopped").glob("*.mcap")) == ["stopped_0.mcap", "stopped_1.mcap"]
+    with AnyReader([tmp_path / "whole"]) as reader:
+        n = reader.message_count
+    with AnyReader([tmp_path / "stopped"]) as reader:  # metadata.yaml lists both files
+        assert reader.message_count == sum(1 for _ in reader.messages()) == n + 2  # the latched pair again
+
+
+def _cli(*args, **kw):
+    return subprocess.run([sys.executable, "-m", "gpusph_ros.cli", "run", *args], capture_output=True, text=True,
+                          cwd=REPO, timeout=300, **kw)
+
+
+def test_a_killed_run_resumes_from_its_last_checkpoint_and_the_file_is_cut_back_to_it(tmp_path):
+    """SIGKILL after a checkpoint and more outputs: --resume cuts the file back to what the checkpoint
+    counted and goes on; the recording equals the uninterrupted run's."""
+    sets = [a for s in SETS + ["checkpoint_interval=0.5", "end_time=0.6"] for a in ("--set", s)]
+    whole = _cli("collapse_2d", *sets, "--quiet", "--out", str(tmp_path / "whole"))
+    assert whole.returncode == 0, whole.stdout + whole.stderr
+    assert not (tmp_path / "whole" / CHECKPOINT_FILE).exists()  # a completed run removes it
+    out = tmp_path / "killed"
+    proc = subprocess.Popen([sys.executable, "-m", "gpusph_ros.cli", "run", "collapse_2d", *sets, "--quiet",
+                             "--out", str(out)], cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 240
+    while not (out / CHECKPOINT_FILE).exists() and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    time.sleep(0.3)  # more outputs after the checkpoint, which the resumed run must not repeat
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    assert (out / CHECKPOINT_FILE).exists(), "the run ended before its first checkpoint"
+    resumed = _cli("--resume", str(out), "--quiet")
+    assert resumed.returncode == 0, resumed.stdout + resumed.stderr
+    assert "resumed at t = " in resumed.stdout
+    _same_recordings(tmp_path / "whole", out)
+
+
+def test_resume_refuses_what_it_cannot_continue(tmp_path):
+    out = _cli("--resume", str(tmp_path))
+    assert out.returncode == 1 and f"has no {CHECKPOINT_FILE}" in out.stderr, out.stderr
+    (tmp_path / CHECKPOINT_FILE).write_bytes(b"not a checkpoint")
+    out = _cli("--resume", str(tmp_path))
+    assert out.returncode == 1 and "cannot be read" in out.stderr and "Traceback" not in out.stderr, out.stderr
+    out = _cli("--resume", str(tmp_path), "--set", "dx=0.01")
+    assert out.returncode == 2 and "--resume DIR alone" in out.stderr, out.stderr
