@@ -23,10 +23,11 @@ def test_the_issue_list_of_parameters_is_declared():
     assert names == {"scene", "dx", "kernel", "viscosity", "sps", "boundary", "density_diffusion", "precision",
                      "device", "cfl", "c0", "end_time", "output_rate", "real_time_factor", "publish_particles",
                      "particle_fields", "record_dir", "frame_id", "autostart", "model", "crop", "wall_planes",
-                     "max_excluded_fraction", "mdbc_slip", "visco_bound_factor", "compression", "stamps"}
+                     "max_excluded_fraction", "mdbc_slip", "visco_bound_factor", "compression", "stamps",
+                     "state_file"}
     for p in PARAMS:
         assert p.description and p.applies in (node_params.RESET, node_params.LIVE, node_params.RECORDING,
-                                               node_params.STARTUP)
+                                               node_params.STARTUP, node_params.SERVICE)
 
 
 def test_defaults_describe_a_run():

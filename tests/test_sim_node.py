@@ -148,7 +148,7 @@ def shared_client(node):
 
 
 # the parameters tests change, put back by ``client`` before each test
-PARAMS_SET_BY_TESTS = ("scene", "dx", "end_time", "cfl", "c0", "record_dir", "real_time_factor")
+PARAMS_SET_BY_TESTS = ("scene", "dx", "end_time", "cfl", "c0", "record_dir", "real_time_factor", "state_file")
 
 
 @pytest.fixture
@@ -327,6 +327,38 @@ def test_a_subscriber_that_joins_late_gets_the_scene_and_its_geometry(client):
     assert {m.ns for m in markers} >= {"tank", "obstacles", "probes", "labels"}
     assert all(m.header.frame_id == "world" for m in markers)
     assert client.wait_for(WRENCH)[-1].header.frame_id == "world/obstruction"
+
+
+def test_save_and_load_state_go_back_to_the_same_run(client, tmp_path):
+    """~/save_state keeps the run's whole state in state_file; stepping on and then ~/load_state brings
+    the run back, and the next output is the one it published the first time, bit for bit."""
+    _pause_and_reset(client)
+    reply = client.call("save_state", Trigger)
+    assert not reply.success and "state_file is empty" in reply.message
+    assert client.set(state_file=str(tmp_path / "state.pkl"))[0].successful
+    for _ in range(3):
+        assert client.call("step", Trigger).success
+    reply = client.call("save_state", Trigger)
+    assert reply.success and "t = 0.0200 s" in reply.message, reply.message
+    client.clear(PARTICLES)
+    assert client.call("step", Trigger).success
+    first = client.wait_for(PARTICLES)[-1]
+    for _ in range(2):
+        assert client.call("step", Trigger).success
+    reply = client.call("load_state", Trigger)
+    assert reply.success and "loaded the state at t = 0.0200 s" in reply.message, reply.message
+    client.clear(PARTICLES)
+    assert client.call("step", Trigger).success
+    again = client.wait_for(PARTICLES)[-1]
+    assert again.header.stamp == first.header.stamp and _t(again.header.stamp) == pytest.approx(0.03)
+    a, b = cloud_arrays(first), cloud_arrays(again)
+    assert all(np.array_equal(a[f], b[f]) for f in a) and np.abs(a["vz"]).max() > 0.1  # the water falls
+    # a state of other settings is refused with what differs
+    assert client.set(dx=0.05)[0].successful
+    _pause_and_reset(client)
+    reply = client.call("load_state", Trigger)
+    assert not reply.success and "settings dx" in reply.message, reply.message
+    assert client.set(state_file="")[0].successful
 
 
 def test_reset_into_another_built_in_scene(client):

@@ -8,6 +8,7 @@ each entry of ``PARAMS`` and asks ``check`` before accepting a change, so a para
 import dataclasses
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 from ..measure.cloud import FIELDS as PARTICLE_FIELDS
 from ..output.folders import folder_problem
@@ -20,6 +21,7 @@ from ..sph.config import LIVE, RESET, ConfigError, SolverConfig
 # (from the next step or output) as the solver's settings say, and
 RECORDING = "recording"  # at the next recording
 STARTUP = "startup"  # read-only, set at start-up
+SERVICE = "service"  # read by the service that uses it
 
 VISCOSITY_CHOICES = ("artificial", "laminar")  # SPS is laminar + the sub-particle-scale stress: `sps`
 
@@ -84,6 +86,8 @@ PARAMS = (
           "added to the wall clock at the run's start, for viewers that show dates)", RESET, choices=STAMPS),
     Param("frame_id", "world", "the world frame (z up) of every message; a body's wrench is in <frame_id>/<body>",
           LIVE),
+    Param("state_file", "", "the file ~/save_state writes the run's whole state to and ~/load_state reads it from "
+          "(the same scene and settings)", SERVICE),
     Param("autostart", True, "configure and activate the (lifecycle) node at start-up", STARTUP),
 )
 BY_NAME = {p.name: p for p in PARAMS}
@@ -100,7 +104,8 @@ _SETTINGS_OF = {"sps": ("viscosity",), "publish_particles": ("particle_rate",)}
 
 def applies_text(name: str) -> str:
     return {RESET: "at the next ~/reset (it needs new particles)", LIVE: "from the next step",
-            RECORDING: "at the next recording", STARTUP: "at start-up only"}[BY_NAME[name].applies]
+            RECORDING: "at the next recording", STARTUP: "at start-up only",
+            SERVICE: "at the next ~/save_state or ~/load_state"}[BY_NAME[name].applies]
 
 
 def _device_names() -> list:
@@ -111,7 +116,7 @@ def _device_names() -> list:
 
 # the longest text a parameter takes: a path (Linux's PATH_MAX), a frame id (tf2's frames are short
 # names; a 10^6-character one was written into every message, 590 MB of recording in 6 s)
-MAX_TEXT = {"scene": MAX_PATH, "record_dir": MAX_PATH, "frame_id": 256}
+MAX_TEXT = {"scene": MAX_PATH, "record_dir": MAX_PATH, "state_file": MAX_PATH, "frame_id": 256}
 
 
 def _check_one(p: Param, value):
@@ -135,6 +140,8 @@ def _check_one(p: Param, value):
         return "frame_id: an empty frame is not allowed; e.g. world"
     elif p.name == "record_dir" and value and (problem := folder_problem(value)):
         return f"record_dir: {value!r} cannot be written: {problem}"
+    elif p.name == "state_file" and value and (problem := folder_problem(str(Path(value).expanduser().parent))):
+        return f"state_file: {value!r} cannot be written: its folder {problem}"
     return None
 
 

@@ -292,6 +292,72 @@ class Session:
             self._cond.notify_all()
         return run
 
+    def _held(self, work):
+        """``work(run)`` with the solver held between two steps; what it returns."""
+        with self._cond:
+            self._hold = True
+            self._cond.notify_all()
+            while self._busy:
+                self._cond.wait()
+        try:
+            return work(self.run)
+        finally:
+            with self._cond:
+                self._hold = False
+                self._cond.notify_all()
+
+    def save_state(self, path) -> tuple:
+        """(success, message): the run's whole state (``Run.checkpoint``), with the scene and
+        settings it belongs to, written to ``path`` between two steps."""
+        import pickle
+
+        if self.run is None:
+            return False, "no scene is loaded: configure the node (or call ~/reset)"
+        if self.failure:
+            return False, f"the run failed ({self.failure}); its state is not kept; ~/reset or ~/load_state"
+        state = self._held(lambda run: {"scene": run.scene.text, "settings": run.run_config.as_dict(),
+                                        "run": run.checkpoint(), "t": run.solver.time})
+        path = Path(path).expanduser()
+        tmp = path.with_name(path.name + ".tmp")
+        with open(tmp, "wb") as f:
+            pickle.dump(state, f, protocol=pickle.HIGHEST_PROTOCOL)
+        tmp.replace(path)
+        return True, f"saved the state at t = {state['t']:.4f} s to {path}"
+
+    def load_state(self, path) -> tuple:
+        """(success, message): the run goes on from the state ``save_state`` wrote to ``path``, if it
+        is of the same scene and settings; a recording under way is finished first (its time would
+        go back)."""
+        import pickle
+
+        if self.run is None:
+            return False, "no scene is loaded: configure the node (or call ~/reset)"
+        path = Path(path).expanduser()
+        try:
+            with open(path, "rb") as f:
+                state = pickle.load(f)
+            scene, settings, t = state["scene"], state["settings"], float(state["t"])
+        except Exception as err:  # a missing, cut or foreign file: said, never raised
+            return False, f"cannot read a state from {path}: {type(err).__name__}: {err}"
+        run = self.run
+        if scene != run.scene.text or settings != run.run_config.as_dict():
+            differ = sorted(k for k in set(settings) | set(run.run_config.as_dict())
+                            if settings.get(k) != run.run_config.as_dict().get(k))
+            what = "a different scene file" if scene != run.scene.text else "settings " + ", ".join(differ)
+            return False, (f"the state in {path} is of {what}; set the parameters it was saved with and "
+                           "~/reset, then load it")
+        self.stop_recording("stopped: a saved state was loaded")
+
+        def load(run):
+            run.restore(state["run"])
+            with self._cond:
+                self.failure, self._step_to, self._published = "", -1, run.next_output - 1
+                self._generation += 1
+                self._pace = self._window = None
+
+        self._held(load)
+        return True, f"loaded the state at t = {t:.4f} s from {path}; {self.state}"
+
     def clear(self):
         """Drop the run (lifecycle cleanup)."""
         self.stop_recording("stopped")

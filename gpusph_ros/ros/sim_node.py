@@ -15,7 +15,8 @@ velocity, FluidPressure, PointStamped surface level), ``/clock`` (before the out
 ``/diagnostics`` (1 Hz), and latched (transient local) ``~/scene``, ``~/geometry`` and, where tf2_msgs
 is installed, ``/tf_static``. z is up in every scene (``output.frames``); every stamp is simulated
 time.
-Services (std_srvs): ``~/reset``, ``~/set_paused``, ``~/step``, ``~/record``.
+Services (std_srvs): ``~/reset``, ``~/set_paused``, ``~/step``, ``~/record``, ``~/save_state`` and
+``~/load_state`` (the run's whole state to and from ``state_file``).
 
 No client can stop the node: every callback (services, parameter checks, lifecycle transitions,
 timers) answers whatever the layers below raise with a reason, logs it once, and turns an
@@ -133,6 +134,8 @@ class SimNode(LifecycleNode):
         self.create_service(SetBool, "~/set_paused", self._set_paused, callback_group=services)
         self.create_service(Trigger, "~/step", self._step, callback_group=services)
         self.create_service(SetBool, "~/record", self._record, callback_group=services)
+        self.create_service(Trigger, "~/save_state", self._save_state, callback_group=services)
+        self.create_service(Trigger, "~/load_state", self._load_state, callback_group=services)
         self.create_timer(1.0, self._tick)
         self.get_logger().info(f"gpusph_ros {__version__}")
         if self.value("autostart"):
@@ -363,6 +366,31 @@ class SimNode(LifecycleNode):
                 response.success, response.message = True, f"recording to {self._start_recording(directory)}"
             except OSError as err:
                 response.success, response.message = False, f"cannot record to {directory}: {err}"
+        return response
+
+    def _state_file(self):
+        path = self.value("state_file")
+        return path or None
+
+    @_service
+    def _save_state(self, request, response):
+        path = self._state_file()
+        if path is None:
+            response.success, response.message = False, "state_file is empty: set it first (a file path)"
+            return response
+        try:
+            response.success, response.message = self.session.save_state(path)
+        except OSError as err:
+            response.success, response.message = False, f"cannot write {path}: {err.strerror or err}"
+        return response
+
+    @_service
+    def _load_state(self, request, response):
+        path = self._state_file()
+        if path is None:
+            response.success, response.message = False, "state_file is empty: set it first (a file path)"
+            return response
+        response.success, response.message = self.session.load_state(path)
         return response
 
     # -- output --------------------------------------------------------------------------------
