@@ -271,26 +271,16 @@ class Session:
     def replace(self, build):
         """Stop the solver between two steps, build a new run with ``build()`` and make it
         current (paused or running as before). If ``build`` raises, the old run stays."""
-        with self._cond:
-            self._hold = True
-            self._cond.notify_all()
-            while self._busy:
-                self._cond.wait()
-        try:
+        def swap(_):
             run = build()
-        except BaseException:
+            self.stop_recording("reset")
             with self._cond:
-                self._hold = False
-                self._cond.notify_all()
-            raise
-        self.stop_recording("reset")
-        with self._cond:
-            self.run, self.failure, self._step_to, self._published, self._pending = run, "", -1, -1, {}
-            self._generation += 1
-            self._pace = self._window = None
-            self._hold = False
-            self._cond.notify_all()
-        return run
+                self.run, self.failure, self._step_to, self._published, self._pending = run, "", -1, -1, {}
+                self._generation += 1
+                self._pace = self._window = None
+            return run
+
+        return self._held(swap)
 
     def _held(self, work):
         """``work(run)`` with the solver held between two steps; what it returns."""

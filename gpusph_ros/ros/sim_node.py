@@ -368,30 +368,24 @@ class SimNode(LifecycleNode):
                 response.success, response.message = False, f"cannot record to {directory}: {err}"
         return response
 
-    def _state_file(self):
+    def _with_state_file(self, response, act):
         path = self.value("state_file")
-        return path or None
-
-    @_service
-    def _save_state(self, request, response):
-        path = self._state_file()
-        if path is None:
+        if not path:
             response.success, response.message = False, "state_file is empty: set it first (a file path)"
             return response
         try:
-            response.success, response.message = self.session.save_state(path)
+            response.success, response.message = act(path)
         except OSError as err:
             response.success, response.message = False, f"cannot write {path}: {err.strerror or err}"
         return response
 
     @_service
+    def _save_state(self, request, response):
+        return self._with_state_file(response, self.session.save_state)
+
+    @_service
     def _load_state(self, request, response):
-        path = self._state_file()
-        if path is None:
-            response.success, response.message = False, "state_file is empty: set it first (a file path)"
-            return response
-        response.success, response.message = self.session.load_state(path)
-        return response
+        return self._with_state_file(response, self.session.load_state)
 
     # -- output --------------------------------------------------------------------------------
     def _publish(self, topic, msg, data):
