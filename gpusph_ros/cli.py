@@ -77,10 +77,11 @@ def run_main(argv=None):
                         "(written every checkpoint_interval of wall time and when the run is stopped)")
     parser.add_argument("--quiet", action="store_true", help="no progress output")
     args = parser.parse_args(argv)
-    if bool(args.resume) == bool(args.scene or args.out or args.set or args.run_config):
+    new_run = args.scene is not None or args.out is not None or args.set or args.run_config
+    if (args.resume is not None) == bool(new_run):
         parser.error("give a scene and --out (and settings), or --resume DIR alone (it runs as the run it continues "
                      "was invoked)")
-    if not args.resume and not (args.scene and args.out):
+    if args.resume is None and (args.scene is None or args.out is None):
         parser.error("a new run needs a scene and --out")
 
     import warp as wp
@@ -93,13 +94,13 @@ def run_main(argv=None):
     from .scenes.settings import resolve
     from .sph import ConfigError
 
-    out = args.resume or args.out
-    problem = None if args.resume else folder_problem(args.out, empty=True)
+    out = args.out if args.resume is None else args.resume
+    problem = None if args.resume is not None else folder_problem(args.out, empty=True)
     if problem:
         print(f"gpusph-run: --out: {args.out!r} cannot be written: {problem}", file=sys.stderr)
         return 1
     try:
-        if args.resume:
+        if args.resume is not None:
             run, recorder, invocation = resume(args.resume)
         else:
             invocation = {"scene": args.scene, "run_config": args.run_config, "sets": args.set}
@@ -111,8 +112,8 @@ def run_main(argv=None):
         return 1
     for warning in run.scene.warnings:
         print(f"gpusph-run: warning: {warning}", file=sys.stderr)
-    print(f"{run.summary()} -> {out}" + (f" (resumed at t = {run.solver.time:.4g} s)" if args.resume else ""),
-          flush=True)
+    resumed = f" (resumed at t = {run.solver.time:.4g} s)" if args.resume is not None else ""
+    print(f"{run.summary()} -> {out}{resumed}", flush=True)
     # SIGTERM and Ctrl-C only ask the run to stop between two steps (a second Ctrl-C stops it at
     # once): an exception raised wherever the signal lands (inside the MCAP writer, say) could leave
     # the recording unclosable and the state half-stepped
