@@ -50,7 +50,7 @@ def main(argv=None):
           f"{solver.n:,} particles, settings {settings}; exact: force {force_exact:.1f} N/m, stagnation "
           f"{p_exact:.0f} Pa")
     print(f"{'t s':>5} {'F particles':>11} {'err':>6} {'F sensors':>9} {'err':>6} {'p sensor':>8} {'err':>6} "
-          f"{'p fluid@face':>12} {'p wall part.':>12} {'p +rho a.n':>10} {'wall s':>7}")
+          f"{'p fluid@face':>12} {'p wall part.':>12} {'p +rho a.n':>10} {'p jet':>8} {'wall s':>7}")
     start = time.perf_counter()
     centre = np.abs(solver.snapshot()["pos"][:, 1]) < dx
     rows, profile = [], []
@@ -66,25 +66,30 @@ def main(argv=None):
         snap = solver.snapshot()
         first = (snap["ptype"] == 1) & centre & (snap["pos"][:, 0] < face + dx)
         p_particles = float(snap["pressure"][first].mean())
+        # the jet's own pressure, in its core more than 3 b upstream of the wall (ambient, 0, in the
+        # exact solution): the stagnation point carries it plus rho U^2 / 2 (Bernoulli on the axis)
+        core = (snap["ptype"] == 0) & (snap["pos"][:, 0] < face - 3 * WIDTH) & (np.abs(snap["pos"][:, 1]) < WIDTH / 4)
+        p_jet = float(snap["pressure"][core].mean()) if core.any() else float("nan")
         p_momentum = momentum_corrected(solver, pts[len(ys) // 2], normals[0], p_sensor)
 
         def err(v, ref):
             return f"{100 * (v / ref - 1):+5.1f}%"
 
         if t >= args.window[0] - 1e-9:
-            rows.append((fx, f_sensors, p_sensor, p_face, p_particles, p_momentum, f_positive))
+            rows.append((fx, f_sensors, p_sensor, p_face, p_particles, p_momentum, f_positive, p_jet))
             profile.append(p_wall)
         print(f"{t:>5.2f} {fx:>11.2f} {err(fx, force_exact):>6} {f_sensors:>9.2f} {err(f_sensors, force_exact):>6} "
               f"{p_sensor:>8.1f} {err(p_sensor, p_exact):>6} {p_face:>12.1f} {p_particles:>12.1f} "
-              f"{p_momentum:>10.1f} {time.perf_counter() - start:>7.1f}", flush=True)
-    fx, f_sensors, p_sensor, p_face, p_particles, p_momentum, f_positive = np.mean(rows, axis=0)
+              f"{p_momentum:>10.1f} {p_jet:>8.1f} {time.perf_counter() - start:>7.1f}", flush=True)
+    fx, f_sensors, p_sensor, p_face, p_particles, p_momentum, f_positive, p_jet = np.nanmean(rows, axis=0)
     print(f"mean over {args.window[0]:g}-{args.window[1]:g} s ({len(rows)} samples): force on the particles "
           f"{fx:.1f} N/m ({100 * (fx / force_exact - 1):+.1f}%), wall-pressure load {f_sensors:.1f} N/m "
           f"({100 * (f_sensors / force_exact - 1):+.1f}%; {100 * (f_positive / force_exact - 1):+.1f}% without the "
           f"pressures below ambient), stagnation pressure: sensor {p_sensor:.0f} Pa "
           f"({100 * (p_sensor / p_exact - 1):+.1f}%), fluid at the face {p_face:.0f} Pa, wall particles "
           f"{p_particles:.0f} Pa ({p_particles / p_exact:.1f} x), the sensor with the fluid's deceleration "
-          f"{p_momentum:.0f} Pa ({100 * (p_momentum / p_exact - 1):+.1f}%)")
+          f"{p_momentum:.0f} Pa ({100 * (p_momentum / p_exact - 1):+.1f}%); the jet's core {p_jet:.1f} Pa, the "
+          f"sensor above it {p_sensor - p_jet:.0f} Pa ({100 * ((p_sensor - p_jet) / p_exact - 1):+.1f}%)")
     mean = np.mean(profile, axis=0) / p_exact
     print("wall pressure along the face, mean over the window, in rho U^2 / 2: " + ", ".join(
         f"y/b {y / WIDTH:+.1f}: {v:.2f}" for y, v in zip(ys[::len(ys) // 16], mean[::len(ys) // 16])))
