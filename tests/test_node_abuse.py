@@ -331,6 +331,8 @@ FUZZ_VALUES = {
     "publish_particles": [True, False],
     "particle_fields": [["vx"], ["vx", "vy", "vz", "density", "pressure"], ["speed"], ["vx", "vx"]],
     "frame_id": ["world", "map", "", "w" * 300],
+    "compression": ["zstd", "lz4", "none", "gzip"],
+    "stamps": ["simulated", "epoch", "wall"],
     "model": ["full", "slab", "2d", "3d"],
     "crop": [True, False],
     "wall_planes": [True, False],
@@ -340,13 +342,15 @@ FUZZ_VALUES = {
 
 def test_two_hundred_seeded_parameters_calls_and_transitions_are_each_answered_within_2_s(tmp_path):
     """One node, 200 seeded random actions: a parameter set to a good or a bad value, a service
-    call (reset, pause, step, record) or a lifecycle transition (shut-down last of all). Every one is
-    answered within 2 s, the node survives them all and shuts down cleanly, and every bag it wrote
-    reads back whole."""
+    call (reset, pause, step, record, save and load the state) or a lifecycle transition (shut-down
+    last of all). Every one is answered within 2 s, the node survives them all and shuts down
+    cleanly, and every bag it wrote reads back whole."""
     from lifecycle_msgs.msg import Transition
     from lifecycle_msgs.srv import ChangeState, GetState
 
     rng = random.Random(20261204)
+    # a state file: one to write, a folder, one under a file the system will not let be written
+    values = {**FUZZ_VALUES, "state_file": [str(tmp_path / "state.pkl"), str(tmp_path), "/proc/1/state", ""]}
     node = Node(tmp_path, BASE_DOMAIN + 2, "publish_particles:=false", f"record_dir:={tmp_path / 'bags'}")
     transitions = [Transition.TRANSITION_CONFIGURE, Transition.TRANSITION_CLEANUP, Transition.TRANSITION_ACTIVATE,
                    Transition.TRANSITION_DEACTIVATE]
@@ -359,9 +363,9 @@ def test_two_hundred_seeded_parameters_calls_and_transitions_are_each_answered_w
             kinds.add(kind)
             start = time.monotonic()
             if kind == "parameter":
-                name = rng.choice(sorted(FUZZ_VALUES))
+                name = rng.choice(sorted(values))
                 try:
-                    answers["parameter", client.set(**{name: rng.choice(FUZZ_VALUES[name])})[0].successful] += 1
+                    answers["parameter", client.set(**{name: rng.choice(values[name])})[0].successful] += 1
                 except TimeoutError:
                     slow.append((name, "no answer"))
             elif kind == "service":
@@ -369,7 +373,8 @@ def test_two_hundred_seeded_parameters_calls_and_transitions_are_each_answered_w
                                                 ("set_paused", SetBool, {"data": True}),
                                                 ("set_paused", SetBool, {"data": False}),
                                                 ("record", SetBool, {"data": True}),
-                                                ("record", SetBool, {"data": False})])
+                                                ("record", SetBool, {"data": False}),
+                                                ("save_state", Trigger, {}), ("load_state", Trigger, {})])
                 try:
                     answers[name, client.call(name, srv, timeout=ANSWER, **fields).success] += 1
                 except TimeoutError:
@@ -391,6 +396,7 @@ def test_two_hundred_seeded_parameters_calls_and_transitions_are_each_answered_w
         for kind in ("parameter", "transition"):
             assert answers[kind, True] and answers[kind, False], answers
         assert answers["reset", True], answers
+        assert answers["save_state", True] + answers["load_state", True], answers  # states were kept and loaded
         state = client.call("get_state", GetState).current_state.label
         shutdown = {"unconfigured": Transition.TRANSITION_UNCONFIGURED_SHUTDOWN,
                     "inactive": Transition.TRANSITION_INACTIVE_SHUTDOWN,
