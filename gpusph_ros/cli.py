@@ -87,6 +87,30 @@ def run_main(argv=None):
     import warp as wp
 
     wp.config.log_level = wp.LOG_WARNING  # no per-module load lines
+    # SIGTERM and Ctrl-C only ask the run to stop between two steps (a second Ctrl-C stops it at
+    # once): an exception raised wherever the signal lands (inside the MCAP writer, say) could leave
+    # the recording unclosable and the state half-stepped. Set before anything is built (a stop
+    # asked for while the run builds ends it at its first step, with a checkpoint), and put back
+    # after (a caller's own handlers, a test runner's, are its business again)
+    stop = threading.Event()
+
+    def ask_to_stop(signum, frame):
+        if signum == signal.SIGINT and stop.is_set():
+            raise KeyboardInterrupt
+        stop.set()
+
+    previous = {sig: signal.signal(sig, ask_to_stop) for sig in (signal.SIGTERM, signal.SIGINT)}
+    try:
+        return _run(args, stop)
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
+def _run(args, stop) -> int:
+    """gpusph-run's work, once its arguments are checked; ``stop`` is set by SIGTERM or Ctrl-C."""
+    from pathlib import Path
+
     from .analysis import report as R
     from .output.folders import folder_problem
     from .runner import Checkpoints, Run, resume
@@ -103,7 +127,12 @@ def run_main(argv=None):
         if args.resume is not None:
             run, recorder, invocation = resume(args.resume)
         else:
-            invocation = {"scene": args.scene, "run_config": args.run_config, "sets": args.set}
+            # files by absolute path: a resume may start from another folder
+            def where(name):
+                return str(Path(name).resolve()) if Path(name).is_file() else name
+
+            invocation = {"scene": where(args.scene), "run_config": [where(f) for f in args.run_config],
+                          "sets": args.set}
             scene = load_scene(args.scene)
             run = Run(scene, resolve(scene, files=args.run_config, sets=args.set))
             recorder = run.open_recording(args.out)
@@ -114,18 +143,6 @@ def run_main(argv=None):
         print(f"gpusph-run: warning: {warning}", file=sys.stderr)
     resumed = f" (resumed at t = {run.solver.time:.4g} s)" if args.resume is not None else ""
     print(f"{run.summary()} -> {out}{resumed}", flush=True)
-    # SIGTERM and Ctrl-C only ask the run to stop between two steps (a second Ctrl-C stops it at
-    # once): an exception raised wherever the signal lands (inside the MCAP writer, say) could leave
-    # the recording unclosable and the state half-stepped
-    stop = threading.Event()
-
-    def ask_to_stop(signum, frame):
-        if signum == signal.SIGINT and stop.is_set():
-            raise KeyboardInterrupt
-        stop.set()
-
-    signal.signal(signal.SIGTERM, ask_to_stop)
-    signal.signal(signal.SIGINT, ask_to_stop)
     checkpoints = Checkpoints(out, invocation, recorder, run.output.checkpoint_interval)
     start = time.perf_counter()
     result = run.execute(recorder, progress=None if args.quiet else Progress(run), stop=stop.is_set,

@@ -1,6 +1,7 @@
 """Checkpoint and resume (`gpusph-run --resume DIR`): a run stopped, or killed, and resumed records
 what the same run never stopped records, bit for bit on the CPU, and its bag (files _0, _1, ...)
 reads whole with rosbags and the analysis."""
+import os
 import signal
 import subprocess
 import sys
@@ -106,3 +107,27 @@ def test_resume_refuses_what_it_cannot_continue(tmp_path):
     assert out.returncode == 1 and "cannot be read" in out.stderr and "Traceback" not in out.stderr, out.stderr
     out = _cli("--resume", str(tmp_path), "--set", "dx=0.01")
     assert out.returncode == 2 and "--resume DIR alone" in out.stderr, out.stderr
+
+
+def test_a_run_of_a_scene_file_resumes_from_another_folder(tmp_path):
+    """The invocation keeps a scene file by its absolute path: --resume from elsewhere finds it."""
+    scene = tmp_path / "my_collapse.yaml"
+    scene.write_text((REPO / "config/scenes/collapse_2d.yaml").read_text().replace("name: collapse_2d",
+                                                                                 "name: my_collapse"))
+    work = tmp_path / "work"
+    work.mkdir()
+    sets = [a for s in ["dx=0.01", "end_time=0.2"] for a in ("--set", s)]
+    proc = subprocess.Popen([sys.executable, "-m", "gpusph_ros.cli", "run", "my_collapse.yaml", *sets, "--quiet",
+                             "--out", str(work / "bag")], cwd=tmp_path, stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True)
+    while not (work / "bag" / "metadata.yaml").exists() and proc.poll() is None:
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGTERM)
+    out = proc.communicate(timeout=120)[0]
+    if "completed" in out:
+        pytest.skip("the run ended before the stop arrived")  # a 0.2 s run on a fast machine
+    assert "checkpoint: " in out, out
+    resumed = subprocess.run([sys.executable, "-m", "gpusph_ros.cli", "run", "--resume", str(work / "bag"), "--quiet"],
+                             cwd=work, capture_output=True, text=True, timeout=300, env={**os.environ,
+                                                                                        "PYTHONPATH": str(REPO)})
+    assert resumed.returncode == 0 and "my_collapse" in resumed.stdout, resumed.stdout + resumed.stderr
