@@ -30,7 +30,10 @@ class Client:
         self._clients = {}
 
     def close(self):
-        self.executor.shutdown()
+        # the spinning thread ends before its node goes: destroyed under a spinning executor, the node
+        # once left it busy-waiting on the GIL, and a test's next wait for its node process never woke
+        self.executor.shutdown(timeout_sec=10.0)
+        self._thread.join(timeout=10.0)
         self.node.destroy_node()
         rclpy.shutdown(context=self.context)
 
