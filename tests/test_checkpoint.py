@@ -1,0 +1,47 @@
+"""A solver's state taken and put back (sph/checkpoint.py): a solver restored from a state taken at
+0.1 s and stepped to 0.2 s ends bit for bit where the solver it was taken from ends, for each kind of
+wall, viscosity and precision, in 2D and 3D; the neighbour lists, rebuilt rather than stored, come
+back pair for pair."""
+import numpy as np
+import pytest
+
+from gpusph_ros.scenes.build import build
+from gpusph_ros.scenes.schema import load_scene
+from gpusph_ros.sph import checkpoint
+
+pytestmark = pytest.mark.physics
+
+
+@pytest.mark.parametrize("scene, dx, settings", [
+    ("collapse_2d", 0.01, {}),
+    ("collapse_2d", 0.01, {"viscosity": "sps", "precision": "float64"}),
+    ("dambreak1_thesis", 0.06, {"boundary": "mdbc"}),
+    ("dambreak1_thesis", 0.06, {"boundary": "monaghan_kajtar", "shifting": True}),
+])
+def test_a_restored_solver_steps_as_the_one_it_was_taken_from(scene, dx, settings):
+    model = build(load_scene(scene), dx=dx, **settings)
+    first = model.solver()
+    first.advance(0.1)
+    state = checkpoint.capture(first)
+    assert "neighbours.nbr" not in state["arrays"]  # rebuilt, not stored
+    second = model.solver()
+    checkpoint.restore(second, state)
+    count = first.neighbours.count.numpy()
+    assert np.array_equal(second.neighbours.count.numpy(), count)
+    width = first.neighbours.max_neighbours
+    used = np.arange(width)[None, :] < count[:, None]  # the slots past a list's length hold old entries
+    lists = [nl.nbr.numpy().reshape(-1, width)[used] for nl in (first.neighbours, second.neighbours)]
+    assert np.array_equal(*lists) and count.sum() > 0
+    assert second.neighbours.builds.numpy()[0] == first.neighbours.builds.numpy()[0]
+    first.advance(0.2)
+    second.advance(0.2)
+    assert (second.steps, second.time) == (first.steps, first.time)
+    a, b = first.snapshot(), second.snapshot()
+    assert all(np.array_equal(a[k], b[k]) for k in a)
+
+
+def test_a_state_of_another_solver_is_refused_with_what_differs():
+    small = build(load_scene("collapse_2d"), dx=0.01).solver()
+    other = build(load_scene("collapse_2d"), dx=0.02).solver()
+    with pytest.raises(ValueError, match="checkpoint: .* has shape"):
+        checkpoint.restore(other, checkpoint.capture(small))
