@@ -301,7 +301,7 @@ def sweep_main(argv=None):
 def plan_main(argv=None):
     parser = argparse.ArgumentParser(prog="gpusph-plan", description="Particles, device memory, steps and wall time "
                                      "of a run, from a short calibration run on its device.")
-    parser.add_argument("scene", nargs="?", help="built-in scene name or path to a scene YAML file")
+    parser.add_argument("scene", help="built-in scene name or path to a scene YAML file")
     parser.add_argument("--run-config", action="append", default=[], metavar="NAME|FILE")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     parser.add_argument("--calibration-steps", type=_at_least_one, default=30,

@@ -275,6 +275,35 @@ class Run:
 CHECKPOINT_FILE = "checkpoint.pkl"
 
 
+def write_state(path, state: dict) -> Path:
+    """Pickle ``state`` (a checkpoint, a node's saved state) to ``path``, replaced whole: written
+    beside it first, so a kill leaves the previous one."""
+    import pickle
+
+    path = Path(path).expanduser()
+    tmp = path.with_name(path.name + ".tmp")
+    with open(tmp, "wb") as f:
+        pickle.dump(state, f, protocol=pickle.HIGHEST_PROTOCOL)
+    tmp.replace(path)
+    return path
+
+
+def read_state(path, keys) -> dict:
+    """What ``write_state`` wrote to ``path``, holding ``keys``; ValueError saying why not (a missing,
+    cut or foreign file), never a traceback."""
+    import pickle
+
+    try:
+        with open(Path(path).expanduser(), "rb") as f:
+            state = pickle.load(f)
+        missing = [k for k in keys if k not in state]
+    except Exception as err:
+        raise ValueError(f"{path} cannot be read ({type(err).__name__}: {err})") from None
+    if missing:
+        raise ValueError(f"{path} cannot be read (it lacks {', '.join(missing)})")
+    return state
+
+
 class Checkpoints:
     """A recorded run's checkpoints, in its bag folder (``checkpoint.pkl``): the run's state
     (``Run.checkpoint``), what rebuilds it (``invocation``: scene, run configurations, settings) and
@@ -292,15 +321,9 @@ class Checkpoints:
             self.write(run)
 
     def write(self, run) -> Path:
-        import pickle
-
         self.recorder.flush()
-        state = {"invocation": self.invocation, "run": run.checkpoint(),
-                 "recording": {"file": self.recorder.file_name, "messages": self.recorder.count}}
-        tmp = self.path.with_suffix(".tmp")
-        with open(tmp, "wb") as f:
-            pickle.dump(state, f, protocol=pickle.HIGHEST_PROTOCOL)
-        tmp.replace(self.path)
+        write_state(self.path, {"invocation": self.invocation, "run": run.checkpoint(),
+                                "recording": {"file": self.recorder.file_name, "messages": self.recorder.count}})
         self._last = time.monotonic()
         return self.path
 
@@ -314,8 +337,6 @@ def resume(folder):
     cut back to what it counted (a killed run wrote on after it), any later file set aside as
     ``.superseded``, and a new file ``<name>_<k>.mcap`` opened after them. ValueError when there is
     nothing to resume."""
-    import pickle
-
     from .output.recording import bag_files, file_entries, is_whole, repair
     from .scenes.schema import load_scene
     from .scenes.settings import resolve
@@ -326,11 +347,10 @@ def resume(folder):
         raise ValueError(f"--resume: {folder} has no {CHECKPOINT_FILE}: not a run stopped before its end (a "
                          "completed run removes it; checkpoint_interval 0 writes none)")
     try:
-        with open(path, "rb") as f:
-            state = pickle.load(f)
-        invocation, recording = state["invocation"], state["recording"]
-    except Exception as err:  # a cut or foreign file: said, never a traceback
-        raise ValueError(f"--resume: {path} cannot be read ({type(err).__name__}: {err})") from None
+        state = read_state(path, ("invocation", "run", "recording"))
+    except ValueError as err:
+        raise ValueError(f"--resume: {err}") from None
+    invocation, recording = state["invocation"], state["recording"]
     scene = load_scene(invocation["scene"])
     run = Run(scene, resolve(scene, files=invocation["run_config"], sets=invocation["sets"]))
     run.restore(state["run"])

@@ -16,6 +16,8 @@ from mcap.records import Channel, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader
 from rclpy.serialization import deserialize_message
 
+from ..output.recording import bag_files
+
 
 def mcap_files(path) -> list:
     """The .mcap files of a bag directory in their order (a resumed run adds <name>_1, ...), or
@@ -23,12 +25,7 @@ def mcap_files(path) -> list:
     path = Path(path)
     if path.is_file():
         return [path]
-
-    def index(p):
-        tail = p.stem.rpartition("_")[2]
-        return (int(tail) if tail.isdigit() else -1, p.name)
-
-    files = sorted(path.glob("*.mcap"), key=index)
+    files = bag_files(path)
     if not files:
         raise FileNotFoundError(f"{path}: no .mcap file here; expected a recording made by gpusph-run or sim_node")
     return files

@@ -84,8 +84,9 @@ EXPORTS = {"dambreak1": _dambreak1, "lobovsky": _lobovsky}
 
 def series_of(path, data=None) -> list:
     """(the Series of the recording at ``path`` that have a measured counterpart, its metadata)."""
-    _, curves = report.analyse(path, data)
-    meta = read(path).metadata
+    rec = read(path)
+    _, curves = report.analyse(path, data, rec)
+    meta = rec.metadata
     scene = yaml.safe_load(meta.get("scene", "")) or {}
     make = EXPORTS.get(report.analysis_of(scene, meta.get("scene_name", scene.get("name", "?"))).get("case"))
     return (make(curves, scene) if make else []), meta

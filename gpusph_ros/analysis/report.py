@@ -257,11 +257,12 @@ def analysis_of(scene: dict, name: str) -> dict:
     return {}
 
 
-def analyse(path, data=None) -> tuple:
+def analyse(path, data=None, rec=None) -> tuple:
     """(report, curves): the metrics of the recording at ``path`` (a bag directory) as a JSON-ready
     dict, and the curves behind them; the comparison is the one the recorded scene names in its
-    ``analysis:`` section. ``data``: the reference folder (default: the package's own, R.data_dir())."""
-    rec = read(path)
+    ``analysis:`` section. ``data``: the reference folder (default: the package's own, R.data_dir());
+    ``rec``: the recording, when the caller has read it already."""
+    rec = rec or read(path)
     meta = rec.metadata
     data = data or R.data_dir()
     scene = yaml.safe_load(meta.get("scene", "")) or {}

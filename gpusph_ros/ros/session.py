@@ -14,6 +14,7 @@ from pathlib import Path
 
 from rclpy.serialization import serialize_message
 
+from ..runner import read_state, write_state
 from ..sph import HealthError, NeighbourOverflow
 from .node_params import LIVE_SETTINGS
 
@@ -299,40 +300,30 @@ class Session:
     def save_state(self, path) -> tuple:
         """(success, message): the run's whole state (``Run.checkpoint``), with the scene and
         settings it belongs to, written to ``path`` between two steps."""
-        import pickle
-
         if self.run is None:
             return False, "no scene is loaded: configure the node (or call ~/reset)"
         if self.failure:
             return False, f"the run failed ({self.failure}); its state is not kept; ~/reset or ~/load_state"
         state = self._held(lambda run: {"scene": run.scene.text, "settings": run.run_config.as_dict(),
                                         "run": run.checkpoint(), "t": run.solver.time})
-        path = Path(path).expanduser()
-        tmp = path.with_name(path.name + ".tmp")
-        with open(tmp, "wb") as f:
-            pickle.dump(state, f, protocol=pickle.HIGHEST_PROTOCOL)
-        tmp.replace(path)
-        return True, f"saved the state at t = {state['t']:.4f} s to {path}"
+        return True, f"saved the state at t = {state['t']:.4f} s to {write_state(path, state)}"
 
     def load_state(self, path) -> tuple:
         """(success, message): the run goes on from the state ``save_state`` wrote to ``path``, if it
         is of the same scene and settings; a recording under way is finished first (its time would
         go back)."""
-        import pickle
-
         if self.run is None:
             return False, "no scene is loaded: configure the node (or call ~/reset)"
         path = Path(path).expanduser()
         try:
-            with open(path, "rb") as f:
-                state = pickle.load(f)
-            scene, settings, t = state["scene"], state["settings"], float(state["t"])
-        except Exception as err:  # a missing, cut or foreign file: said, never raised
-            return False, f"cannot read a state from {path}: {type(err).__name__}: {err}"
+            state = read_state(path, ("scene", "settings", "run", "t"))
+        except ValueError as err:
+            return False, f"cannot read a state: {err}"
+        scene, settings, t = state["scene"], state["settings"], float(state["t"])
         run = self.run
-        if scene != run.scene.text or settings != run.run_config.as_dict():
-            differ = sorted(k for k in set(settings) | set(run.run_config.as_dict())
-                            if settings.get(k) != run.run_config.as_dict().get(k))
+        present = run.run_config.as_dict()
+        if scene != run.scene.text or settings != present:
+            differ = sorted(k for k in set(settings) | set(present) if settings.get(k) != present.get(k))
             what = "a different scene file" if scene != run.scene.text else "settings " + ", ".join(differ)
             return False, (f"the state in {path} is of {what}; set the parameters it was saved with and "
                            "~/reset, then load it")
