@@ -20,7 +20,8 @@ from ..sph.state import FLUID
 @functools.lru_cache(maxsize=None)
 def build(scalar):
     vec = wp.types.vector(3, scalar)
-    kernel_w = kernels.build(scalar).w
+    K = kernels.build(scalar)
+    kernel_w, smoothing = K.w, K.smoothing
     N = neighbours.grid(scalar)
     Grid, separation, cell_coord, cells_around, cell_around = (N.Grid, N.separation, N.cell_coord, N.cells_around,
                                                                 N.cell_around)
@@ -45,7 +46,9 @@ def build(scalar):
                 for s in range(start[cell], end[cell]):
                     b = order[s]
                     if f.ptype[b] == FLUID:
-                        w = kernel_w(p.kernel, p.norm, p.inv_h, wp.length(separation(grid, x, f.pos[b])))
+                        # each particle's own kernel (scatter form) where spacings differ
+                        h, inv_h, norm, scale = smoothing(p, f.hsml[b], f.hsml[b])
+                        w = kernel_w(p.kernel, norm, inv_h, wp.length(separation(grid, x, f.pos[b])))
                         wv = w * f.mass[b] / f.rho[b]
                         u += wv * f.vel[b]
                         pr += wv * f.pressure[b]

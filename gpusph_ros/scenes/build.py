@@ -4,7 +4,8 @@ Fluid boxes are filled exactly (``boxes.fill_box``: top layer half a spacing bel
 surface, mass = rho0 x box volume). The wet bed covers the floor outside the fluid boxes'
 and obstacles' footprints, cut into rectangles that are each filled exactly. Obstacles are boxes of
 boundary particles on a lattice that fills each exactly (``block_particles``), a wall's thickness
-deep, each its own body.
+deep, each its own body. Refinement zones (``refine:``) then split the particles in them
+(``refine.py``).
 """
 from dataclasses import dataclass
 
@@ -12,10 +13,11 @@ import numpy as np
 
 from ..sph import boundaries
 from ..sph.config import ConfigError, Plane, SolverConfig, check_device
+from ..sph.eos import hydrostatic_density
 from ..sph.particles import Particles
 from ..sph.solver import Solver
 from ..sph.state import BOUNDARY, FLUID
-from . import reduce, resources
+from . import reduce, refine, resources
 from .boxes import box_tank, cells, fill_box
 from .schema import Scene
 
@@ -91,6 +93,25 @@ def floor_rectangles(extent, footprints, dim: int) -> list:
     return [((x0,) if axes == 1 else (x0, y0), (x1,) if axes == 1 else (x1, y1)) for x0, x1, y0, y1 in out]
 
 
+def restratify(rho, dz, cfg: SolverConfig):
+    """The density dz above a particle of density rho on the hydrostatic profile it was built on
+    (boxes.box_tank: Tait's law at rho0 g d); a dry particle (rho0) stays at rho0."""
+    depth = cfg.eos_b * ((np.asarray(rho) / cfg.rho0) ** cfg.gamma - 1.0) / (cfg.rho0 * cfg.g_norm)
+    return np.where(depth > 0.0, hydrostatic_density(depth - dz, cfg.rho0, cfg.eos_b, cfg.gamma, cfg.g_norm), rho)
+
+
+def _check_refinable(scene: Scene, cfg: SolverConfig):
+    """Refinement zones need walls whose particles carry the fluid's volume: the repulsive walls'
+    and the planes' forces are set by constants of one spacing (their reach, r0 = dx)."""
+    if boundaries.model(cfg.boundary).repulsive:
+        raise ConfigError("boundary", cfg.boundary, "dynamic or mdbc with refinement zones (refine:): a repulsive "
+                                                    "wall's force constants are set for one spacing")
+    planes = [face for face, kind in scene.walls.items() if kind != "particles"]
+    if planes or cfg.planes:
+        raise ConfigError("walls", {face: scene.walls[face] for face in planes} or "planes",
+                          "particles with refinement zones (refine:): a plane's repulsion distance is one spacing")
+
+
 def build_run(scene: Scene, run_config) -> Model:
     """The model of ``scene`` under ``run_config`` (``settings.resolve``), reduced as it asks."""
     cfg = run_config.solver
@@ -141,7 +162,15 @@ def build_from(scene: Scene, cfg: SolverConfig) -> Model:
         body.append(np.full(len(block), k, dtype=np.int32))
         bodies[o.name] = k
     cfg = cfg.replace(solids=[(tuple(o.lo), tuple(o.hi)) for o in scene.obstacles])
-    pos = np.concatenate(pos) + np.asarray(scene.origin)
+    columns = {"pos": np.concatenate(pos), "rho": np.concatenate(rho), "mass": np.concatenate(mass),
+               "ptype": np.concatenate(ptype), "body": np.concatenate(body)}
+    spacing = None
+    if scene.refine:
+        _check_refinable(scene, cfg)
+        refine.check_nesting(scene.refine, scene.tank, dim, dx, cfg.hdx)
+        columns, spacing = refine.split(columns, np.full(len(columns["pos"]), dx), scene.refine, scene.tank, dim, dx,
+                                        stratify=lambda rho, dz: restratify(rho, dz, cfg))
+    pos = columns["pos"] + np.asarray(scene.origin)
     if any(scene.origin):
         def move(point):
             return tuple(c + o if abs(c) < 1.0e30 else c for c, o in zip(point, scene.origin))
@@ -150,7 +179,6 @@ def build_from(scene: Scene, cfg: SolverConfig) -> Model:
                           wall_hi=move(cfg.wall_hi), solids=[(move(lo), move(hi)) for lo, hi in cfg.solids],
                           planes=[Plane(point=move(p.point), normal=p.normal) for p in cfg.planes])
         scene = reduce.translate(scene, scene.origin)
-    particles = Particles(pos=pos, vel=np.zeros((len(pos), 3)),
-                          rho=np.concatenate(rho), mass=np.concatenate(mass), ptype=np.concatenate(ptype),
-                          body=np.concatenate(body))
+    particles = Particles(pos=pos, vel=np.zeros((len(pos), 3)), rho=columns["rho"], mass=columns["mass"],
+                          ptype=columns["ptype"], body=columns["body"], spacing=spacing)
     return Model(scene=scene, config=cfg, particles=particles, bodies=bodies)

@@ -221,6 +221,9 @@ def apply(scene: Scene, reduction: Reduction, end_time: float, dx: float, hdx: f
     """``scene`` reduced as ``reduction`` says; ConfigError naming the setting when a reduction
     does not fit the scene."""
     reduction.validate()
+    if scene.refine and reduction.label != Reduction().label:
+        raise ConfigError("model", reduction.label, "full, without crop or wall_planes: the scene's refinement zones "
+                                                    "(refine:) are not carried through a reduction yet")
     if reduction.model == "2d_until_reflection":
         why = uniform_across_y(scene, obstacles=False) or ("" if valid_until(scene) else NO_PROBE_UPSTREAM)
         if why:

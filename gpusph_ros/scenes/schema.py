@@ -23,7 +23,10 @@ from .boxes import WALL_KINDS, wall_faces
 
 PROBE_TYPES = ("point", "column", "profile", "gauge", "pressure_sensor")
 SCENE_KEYS = ("name", "description", "source", "dim", "tank", "headroom", "gravity", "depth", "periodic",
-              "walls", "fluid", "wet_bed", "obstacles", "probes", "run", "analysis")
+              "walls", "fluid", "wet_bed", "obstacles", "refine", "probes", "run", "analysis")
+# a refinement zone's spacing over the scene's dx: each level halves its parent's (scenes/refine.py)
+ZONE_RATIOS = (0.5, 0.25, 0.125)
+MAX_ZONES = 16
 # gravity's magnitude [m/s^2]: from a hundredth of the Earth's to a centrifuge model's hundred g
 MIN_GRAVITY, MAX_GRAVITY = 0.0981, 981.0
 # the comparisons a scene may ask its recordings to get (``analysis: {case: ..., gpusph: ...}``), by the
@@ -54,6 +57,17 @@ class Obstacle(Box):
         """The body's reference point, the centre of its box (z = 0 in 2D): its torque is about it."""
         c = [(a + b) / 2 for a, b in zip(self.lo, self.hi)]
         return (c[0], c[1], c[2] if dim == 3 else 0.0)
+
+
+@dataclass
+class Zone(Box):
+    """A refinement zone: the particles in [lo, hi] are at ``ratio`` x the scene's dx (ZONE_RATIOS).
+    ``around`` names the obstacle it was grown from by ``margin`` [m], if any. A zone that reaches a
+    tank face takes in that wall's particles too."""
+
+    ratio: float = 0.5
+    around: str = ""
+    margin: float = 0.0
 
 
 @dataclass
@@ -89,6 +103,7 @@ class Scene:
     walls: dict = field(default_factory=dict)
     wet_bed: float = 0.0
     obstacles: list = field(default_factory=list)
+    refine: list = field(default_factory=list)  # Zones, coarse to fine
     probes: list = field(default_factory=list)
     run_settings: dict = field(default_factory=dict)  # the file's `run:` section (settings.py)
     # the file's `analysis:` section: which comparison its recordings get (ANALYSES), and whether the
@@ -270,6 +285,56 @@ def _obstacles(items, tank, dim) -> list:
     return obstacles
 
 
+def _zones(items, tank, dim, obstacles) -> list:
+    """Refinement zones: boxes {name, lo, hi, ratio} or bands {name, around: <obstacle>, margin, ratio},
+    clipped to the tank, each of ratio below 0.5 inside one of twice its ratio."""
+    if not isinstance(items, list):
+        raise ConfigError("refine", items, "a list of zones {name, lo, hi, ratio} or {name, around, margin, ratio}")
+    if len(items) > MAX_ZONES:
+        raise ConfigError("refine", f"{len(items)} zones", f"at most {MAX_ZONES}")
+    by_name = {o.name: o for o in obstacles}
+    zones = []
+    for k, item in enumerate(items):
+        where = f"refine[{k}]"
+        keys = ("name", "lo", "hi", "around", "margin", "ratio")
+        item = _mapping(where, item, keys, required=("name", "ratio"))
+        ratio = item["ratio"]
+        if ratio not in ZONE_RATIOS or isinstance(ratio, bool):
+            raise ConfigError(f"{where}.ratio", ratio, "one of " + ", ".join(f"{r:g}" for r in ZONE_RATIOS)
+                              + " (the zone's spacing over the scene's dx; each level halves the one around it)")
+        if "around" in item:
+            for key in ("lo", "hi"):
+                if key in item:
+                    raise ConfigError(f"{where}.{key}", item[key], f"no {key}: a zone is a box (lo, hi) or a band "
+                                                                   "around an obstacle (around, margin), not both")
+            if item["around"] not in by_name:
+                raise ConfigError(f"{where}.around", item["around"], "the name of an obstacle of the scene ("
+                                  + (", ".join(by_name) or "it has none") + ")")
+            if "margin" not in item:
+                raise ConfigError(f"{where}.margin", None, "the band's width around the obstacle [m]")
+            margin = _number(f"{where}.margin", item["margin"], lo=0.0, hi=max(tank), lo_open=True)
+            o = by_name[item["around"]]
+            lo = tuple(max(0.0, c - margin) if ax < dim else 0.0 for ax, c in enumerate(o.lo))
+            hi = tuple(min(tank[ax], c + margin) if ax < dim else 0.0 for ax, c in enumerate(o.hi))
+            name = _name(f"{where}.name", item["name"])
+            zones.append(Zone(name, lo, hi, float(ratio), o.name, margin))
+        else:
+            if "margin" in item:
+                raise ConfigError(f"{where}.margin", item["margin"], "no margin: only a band (around) takes one")
+            _, name, lo, hi = _box(where, {key: item[key] for key in ("name", "lo", "hi") if key in item}, tank, dim)
+            zones.append(Zone(name, lo, hi, float(ratio)))
+    _unique("refine", [z.name for z in zones])
+    zones.sort(key=lambda z: -z.ratio)
+    for z in zones:
+        if z.ratio < max(ZONE_RATIOS) and not any(
+                p.ratio == 2 * z.ratio and all(p.lo[ax] <= z.lo[ax] and z.hi[ax] <= p.hi[ax] for ax in range(dim))
+                for p in zones):
+            raise ConfigError(f"refine[{[i.get('name') for i in items].index(z.name)}]", z.name,
+                              f"a zone inside a zone of ratio {2 * z.ratio:g} (each level halves the spacing of the "
+                              "one around it)")
+    return zones
+
+
 def _probes(probes_in, tank, dim) -> list:
     """Probes by name (PROBE_TYPES), each inside the tank."""
     up = dim - 1
@@ -372,6 +437,7 @@ def parse_scene(data, default_name: str = "scene") -> Scene:
     wet_bed = _number("wet_bed", data.get("wet_bed", 0.0), lo=0.0, hi=tank[up])
 
     obstacles = _obstacles(data.get("obstacles") or [], tank, dim)
+    refine = _zones(data.get("refine") or [], tank, dim, obstacles)
     probes = _probes(data.get("probes") or {}, tank, dim)
 
     run = data.get("run") or {}
@@ -383,7 +449,8 @@ def parse_scene(data, default_name: str = "scene") -> Scene:
                  description=_text("description", data.get("description", "")),
                  source=_text("source", data.get("source", "")),
                  headroom=headroom, periodic=periodic, walls=walls, wet_bed=wet_bed, obstacles=obstacles,
-                 probes=probes, run_settings=dict(run), analysis=_analysis(data.get("analysis")), warnings=warnings)
+                 refine=refine, probes=probes, run_settings=dict(run), analysis=_analysis(data.get("analysis")),
+                 warnings=warnings)
 
 
 def _analysis(value) -> dict:

@@ -33,7 +33,10 @@ def params(cfg) -> dict:
 @functools.lru_cache(maxsize=None)
 def build(scalar):
     vec = wp.types.vector(3, scalar)
-    kernel_w = kernels.build(scalar).w
+    K = kernels.build(scalar)
+    kernel_w, smoothing = K.w, K.smoothing
+    S = state.build(scalar)
+    Params, Fields = S.Params, S.Fields
     N = neighbours.grid(scalar)
     Grid, separation = N.Grid, N.separation
 
@@ -52,21 +55,24 @@ def build(scalar):
         return delta_hc0 * psi * m_b / rho_b
 
     @wp.func
-    def shepard(kernel: int, norm: scalar, inv_h: scalar, with_boundary: bool, grid: Grid,
-                nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32), i: int, pos: wp.array(dtype=vec),
-                rho: wp.array(dtype=scalar), mass: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32)) -> scalar:
-        """The Shepard density of particle i over its neighbour list."""
-        w0 = kernel_w(kernel, norm, inv_h, scalar(0.0))
-        num = mass[i] * w0
-        den = mass[i] / rho[i] * w0
+    def shepard(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32), i: int,
+                f: Fields) -> scalar:
+        """The Shepard density of particle i over its neighbour list (the walls' particles too
+        where they carry a fluid volume)."""
+        h, inv_h, norm, scale = smoothing(p, f.hsml[i], f.hsml[i])
+        w0 = kernel_w(p.kernel, norm, inv_h, scalar(0.0))
+        num = f.mass[i] * w0
+        den = f.mass[i] / f.rho[i] * w0
         base = i * grid.max_neighbours
         for k in range(count[i]):
             j = nbr[base + k]
             # the lists may still hold a particle excluded this step
-            if ptype[j] == FLUID or (with_boundary and ptype[j] == BOUNDARY):
-                wk = kernel_w(kernel, norm, inv_h, wp.length(separation(grid, pos[i], pos[j])))
-                num += mass[j] * wk
-                den += mass[j] / rho[j] * wk
+            t_j = f.ptype[j]
+            if t_j == FLUID or (p.wall_volume != 0 and t_j == BOUNDARY):
+                h, inv_h, norm, scale = smoothing(p, f.hsml[i], f.hsml[j])
+                wk = kernel_w(p.kernel, norm, inv_h, wp.length(separation(grid, f.pos[i], f.pos[j])))
+                num += f.mass[j] * wk
+                den += f.mass[j] / f.rho[j] * wk
         return num / den
 
     return SimpleNamespace(continuity=continuity, delta_diffusion=delta_diffusion, shepard=shepard)

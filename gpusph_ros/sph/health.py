@@ -41,7 +41,7 @@ from types import SimpleNamespace
 
 import warp as wp
 
-from . import eos, state
+from . import eos, kernels, state
 
 FLUID = state.FLUID
 BOUNDARY = state.BOUNDARY
@@ -103,6 +103,7 @@ def build(scalar):
     vec = wp.types.vector(3, scalar)
     Params = state.build(scalar).Params
     elastic_energy = eos.build(scalar).elastic_energy
+    own_scale = kernels.build(scalar).own_scale
 
     @wp.func
     def healthy(fail: wp.array(dtype=wp.int32)) -> bool:
@@ -132,10 +133,10 @@ def build(scalar):
         return hit == 1
 
     @wp.func
-    def fault(p: Params, x: vec, x_before: vec, u: vec, r: scalar, t: int, solid_lo: wp.array(dtype=vec),
-              solid_hi: wp.array(dtype=vec)) -> int:
+    def fault(p: Params, x: vec, x_before: vec, u: vec, r: scalar, t: int, scale: scalar,
+              solid_lo: wp.array(dtype=vec), solid_hi: wp.array(dtype=vec)) -> int:
         """The first of REASONS a particle of the candidate state fails (x_before its committed
-        position), or -1."""
+        position; ``scale`` its spacing over the scene's, which the lengths set in dx follow), or -1."""
         if wp.isnan(x) or wp.isinf(x) or wp.isnan(u) or wp.isinf(u) or wp.isnan(r) or wp.isinf(r):
             return NON_FINITE
         bad_density = r < p.rho_min or r > p.rho_max
@@ -148,22 +149,23 @@ def build(scalar):
         if bad_density:
             return DENSITY_BOUNDS
         # beyond a tank wall face, or as deep inside a solid
-        if not in_box(x, p.wall_lo, p.wall_hi, p.penetration, 3) or in_solid(p, x, solid_lo, solid_hi,
-                                                                              -p.penetration):
+        depth = p.penetration * scale
+        if not in_box(x, p.wall_lo, p.wall_hi, depth, 3) or in_solid(p, x, solid_lo, solid_hi, -depth):
             return WALL_PENETRATION
         d = x - x_before
         for ax in range(3):
             if p.periodic[ax] != 0:  # a particle that wrapped moved by the minimum image
                 span = p.hi[ax] - p.lo[ax]
                 d[ax] = d[ax] - span * wp.round(d[ax] / span)
-        if wp.dot(d, d) > p.move_limit2:
+        if wp.dot(d, d) > p.move_limit2 * scale * scale:
             return DISPLACEMENT
         return -1
 
     @wp.kernel(enable_backward=False, module="unique")
     def check_particles(p: Params, pos: wp.array(dtype=vec), pos_c: wp.array(dtype=vec), vel_c: wp.array(dtype=vec),
-                        rho_c: wp.array(dtype=scalar), mass: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
-                        ids: wp.array(dtype=wp.int32), solid_lo: wp.array(dtype=vec), solid_hi: wp.array(dtype=vec),
+                        rho_c: wp.array(dtype=scalar), mass: wp.array(dtype=scalar), hsml: wp.array(dtype=scalar),
+                        ptype: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32),
+                        solid_lo: wp.array(dtype=vec), solid_hi: wp.array(dtype=vec),
                         fail: wp.array(dtype=wp.int32), faulty: wp.array(dtype=wp.int32),
                         pending: wp.array(dtype=wp.int32), pending_mass: wp.array(dtype=wp.float64)):
         """Checks each particle of the candidate state (pos_c, vel_c, rho_c). A fluid particle at
@@ -174,7 +176,7 @@ def build(scalar):
         t = ptype[i]
         if t != FLUID and t != BOUNDARY:
             return  # already excluded
-        reason = fault(p, pos_c[i], pos[i], vel_c[i], rho_c[i], t, solid_lo, solid_hi)
+        reason = fault(p, pos_c[i], pos[i], vel_c[i], rho_c[i], t, own_scale(p, hsml[i]), solid_lo, solid_hi)
         if reason < 0:
             return
         if t == FLUID and p.exclude != 0:

@@ -11,6 +11,10 @@ f(x) = sum_j f_j W(x - x_j) V_j (thesis Eq. 2.4).
 
 q = r / h. The kernel is chosen at run time by an integer id so that one compiled force pass
 serves every kernel; the branch costs nothing next to the neighbour loop.
+
+Where particles differ in smoothing length (refinement zones) a pair uses the mean of its two,
+h_ab = (h_a + h_b) / 2, so that W_ab = W_ba and the pair forces stay antisymmetric (Vacondio et al.
+2013, CMAME 256, Eq. 9; Muta & Ramachandran 2022 symmetrise the same way).
 """
 
 import functools
@@ -20,6 +24,7 @@ from types import SimpleNamespace
 import numpy as np
 import warp as wp
 
+from . import state
 from .device import default_device
 
 NAMES = ("quadratic", "cubic_spline", "wendland")  # the run setting ``kernel``
@@ -41,11 +46,14 @@ def normalisation(kernel: str, dim: int, h: float) -> float:
     return _NORM[(kernel, dim)] / h ** dim
 
 
-def params(cfg) -> dict:
+def params(cfg, h_min: "float | None" = None) -> dict:
     """The Params fields of the kernel of ``cfg`` (a SolverConfig): its id, a_D, h, 1/h and the
-    0.01 h^2 that regularises 1/r^2 in the viscous and diffusive terms."""
+    0.01 h^2 that regularises 1/r^2 in the viscous and diffusive terms; with ``h_min``, the smallest
+    smoothing length of a refined particle set (pairs then read each particle's own)."""
+    h_min = cfg.h if h_min is None else h_min
     return {"kernel": KERNEL_ID[cfg.kernel], "norm": normalisation(cfg.kernel, cfg.dim, cfg.h), "h": cfg.h,
-            "inv_h": 1.0 / cfg.h, "eta2": 0.01 * cfg.h ** 2}
+            "inv_h": 1.0 / cfg.h, "eta2": 0.01 * cfg.h ** 2, "norm_unit": _NORM[(cfg.kernel, cfg.dim)],
+            "variable_h": int(h_min < cfg.h * (1.0 - 1.0e-9)), "h_min": min(h_min, cfg.h)}
 
 
 @functools.lru_cache(maxsize=None)
@@ -98,6 +106,30 @@ def build(scalar):
             return scalar(0.0)
         return norm * inv_h * shape_dq(kernel, q) / r
 
+    Params = state.build(scalar).Params
+
+    @wp.func
+    def smoothing(p: Params, h_a: scalar, h_b: scalar):
+        """(h, 1/h, a_D, h / the scene's h) of the pair a, b: the scene's own values when every
+        particle has the same h (so that a uniform run computes exactly what it did before zones
+        existed), else those of h_ab = (h_a + h_b) / 2."""
+        if p.variable_h == 0:
+            return p.h, p.inv_h, p.norm, scalar(1.0)
+        h = scalar(0.5) * (h_a + h_b)
+        inv_h = scalar(1.0) / h
+        norm = p.norm_unit * inv_h * inv_h
+        if p.dim == 3:
+            norm = norm * inv_h
+        return h, inv_h, norm, h * p.inv_h
+
+    @wp.func
+    def own_scale(p: Params, h_a: scalar) -> scalar:
+        """h_a / the scene's h: what a length set in dx (a cap, a threshold) is scaled by for a
+        refined particle; exactly 1 when every particle has the scene's h."""
+        if p.variable_h == 0:
+            return scalar(1.0)
+        return h_a * p.inv_h
+
     @wp.kernel(enable_backward=False, module="unique")
     def evaluate(kernel: int, norm: scalar, inv_h: scalar, r: wp.array(dtype=scalar),
                  w_out: wp.array(dtype=scalar), dw_out: wp.array(dtype=scalar)):
@@ -105,7 +137,9 @@ def build(scalar):
         w_out[i] = w(kernel, norm, inv_h, r[i])
         dw_out[i] = grad_factor(kernel, norm, inv_h, r[i]) * r[i]
 
-    return SimpleNamespace(shape=shape, shape_dq=shape_dq, w=w, grad_factor=grad_factor, evaluate=evaluate)
+    return SimpleNamespace(shape=shape, shape_dq=shape_dq, w=w, grad_factor=grad_factor, smoothing=smoothing,
+                           own_scale=own_scale,
+                           evaluate=evaluate)
 
 
 def evaluate(kernel: str, dim: int, h: float, r, precision: str = "float64", device: str = None):

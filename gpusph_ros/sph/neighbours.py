@@ -8,6 +8,10 @@ some particle has moved more than a safe fraction of the skin since the last bui
 device decides by itself (a flag the list kernel reads), so no step waits for the host.
 
 Periodic axes wrap both the cell search and the separation vector (minimum image).
+
+Where particles differ in smoothing length (refinement zones) the cells are sized by the largest,
+a pair is listed within LIST_SKIN x its own support 2 h_ab (kernels.smoothing), and the lists go
+stale by the skin of the smallest: a fine particle's list is as long as in a uniform fine run.
 """
 
 import functools
@@ -30,9 +34,13 @@ def shortest_period(h: float) -> float:
     return 3 * LIST_SKIN * 2.0 * h
 
 
-def default_max_neighbours(dim: int, hdx: float) -> int:
+def default_max_neighbours(dim: int, hdx: float, finest: float = 1.0) -> int:
     """Room for 2.5x the neighbours of a uniform lattice (a wall of finer boundary particles adds
-    fewer than the half-support of fluid it replaces)."""
+    fewer than the half-support of fluid it replaces). With refinement (``finest`` < 1, levels
+    halving the spacing) the longest list is a coarse particle's among the next level's: its pairs
+    reach 2 x 1.5 h of theirs."""
+    if finest < 1.0:
+        hdx = 1.5 * hdx
     radius = LIST_SKIN * 2.0 * hdx
     expected = (4.0 / 3.0 * math.pi * radius ** 3) if dim == 3 else (math.pi * radius ** 2)
     return int(8 * math.ceil(2.5 * expected / 8))
@@ -59,6 +67,8 @@ def grid(scalar):
         reach: int  # cells searched each way along an axis
         reach_z: int  # 0 in 2D: one layer of cells
         radius2: scalar  # squared list radius (support plus skin)
+        variable: int  # 1: a pair's radius is radius2 x (h_ab / h)^2 (refinement zones)
+        inv_h2: scalar  # 1 / h^2 of the largest h
         move2: scalar  # squared displacement after which the lists are stale
         max_neighbours: int
 
@@ -145,11 +155,13 @@ def build(scalar):
 
     @wp.kernel(enable_backward=False, module="unique")
     def gather_sorted(order: wp.array(dtype=wp.int32), pos: wp.array(dtype=vec), ptype: wp.array(dtype=wp.int32),
-                      pos_sorted: wp.array(dtype=vec), ptype_sorted: wp.array(dtype=wp.int32)):
+                      hsml: wp.array(dtype=scalar), pos_sorted: wp.array(dtype=vec),
+                      ptype_sorted: wp.array(dtype=wp.int32), hsml_sorted: wp.array(dtype=scalar)):
         k = wp.tid()
         i = order[k]
         pos_sorted[k] = pos[i]
         ptype_sorted[k] = ptype[i]
+        hsml_sorted[k] = hsml[i]
 
     @wp.kernel(enable_backward=False, module="unique")
     def check_displacement(grid: Grid, pos: wp.array(dtype=vec), x_build: wp.array(dtype=vec),
@@ -167,7 +179,8 @@ def build(scalar):
 
     @wp.kernel(enable_backward=False, module="unique")
     def neighbour_list(grid: Grid, pos_sorted: wp.array(dtype=vec), ptype_sorted: wp.array(dtype=wp.int32),
-                       order: wp.array(dtype=wp.int32), start: wp.array(dtype=wp.int32),
+                       hsml_sorted: wp.array(dtype=scalar), order: wp.array(dtype=wp.int32),
+                       start: wp.array(dtype=wp.int32),
                        end: wp.array(dtype=wp.int32), nbr: wp.array(dtype=wp.int32),
                        count: wp.array(dtype=wp.int32), needs_list: wp.array(dtype=wp.int32),
                        ghost: wp.array(dtype=vec), stale: wp.array(dtype=wp.int32), x_build: wp.array(dtype=vec),
@@ -212,10 +225,14 @@ def build(scalar):
                             t_k = ptype_sorted[k]
                             if k != ki and (t_k == FLUID or (fluid_i and t_k == BOUNDARY)):
                                 r = separation(grid, xi, pos_sorted[k])
-                                near = wp.dot(r, r) < grid.radius2
+                                radius2 = grid.radius2
+                                if grid.variable != 0:
+                                    h_ab = scalar(0.5) * (hsml_sorted[ki] + hsml_sorted[k])
+                                    radius2 = radius2 * h_ab * h_ab * grid.inv_h2
+                                near = wp.dot(r, r) < radius2
                                 if two_centres and not near:
                                     rg = r + off
-                                    near = wp.dot(rg, rg) < grid.radius2
+                                    near = wp.dot(rg, rg) < radius2
                                 if near:
                                     if n < grid.max_neighbours:
                                         nbr[base + n] = order[k]
@@ -236,9 +253,12 @@ class NeighbourList:
     SKIN = LIST_SKIN
 
     def __init__(self, scalar, dim: int, support: float, lo, hi, periodic, ptype: wp.array,
-                 needs_list: wp.array, ghost: wp.array, max_neighbours: int, launcher):
+                 needs_list: wp.array, ghost: wp.array, max_neighbours: int, launcher, hsml: wp.array,
+                 variable: bool = False):
         """``ptype``, ``needs_list`` and ``ghost`` (each particle's ghost-node offset, see
-        neighbour_list) are the solver's own device arrays (it may reorder them)."""
+        neighbour_list) are the solver's own device arrays (it may reorder them); ``hsml``, each
+        particle's smoothing length, which a pair's radius follows where ``variable`` (they differ:
+        ``support`` is then the largest's)."""
         self._passes = build(scalar)
         Grid = self._passes.Grid
         n = needs_list.shape[0]
@@ -263,9 +283,13 @@ class NeighbourList:
         g.reach = reach
         g.reach_z = reach if dim == 3 else 0
         g.radius2 = radius * radius
+        g.variable = int(variable)
+        g.inv_h2 = (2.0 / support) ** 2
         # two particles closing in each move at most half the skin; keep a 20% margin for the
         # half-step positions the second force pass uses
         move = 0.8 * 0.5 * (radius - support)
+        if variable:
+            move *= 2.0 * float(hsml.numpy().min()) / support
         g.move2 = move * move
         g.max_neighbours = max_neighbours
         self.grid = g
@@ -282,6 +306,8 @@ class NeighbourList:
         self._ptype = ptype
         self._pos_sorted = wp.zeros(n, dtype=wp.types.vector(3, scalar), device=device)
         self._ptype_sorted = wp.zeros(n, dtype=wp.int32, device=device)
+        self._hsml = hsml
+        self._hsml_sorted = wp.zeros(n, dtype=scalar, device=device)
         self._x_build = wp.zeros(n, dtype=wp.types.vector(3, scalar), device=device)
         self.stale = wp.ones(1, dtype=wp.int32, device=device)
         self.builds = wp.zeros(1, dtype=wp.int32, device=device)  # how many times the lists were built
@@ -307,9 +333,11 @@ class NeighbourList:
         self._start.zero_()
         self._end.zero_()
         wp.launch(self._passes.cell_ranges, dim=n, inputs=[n, self._keys, self._start, self._end], device=self.device)
-        wp.launch(self._passes.gather_sorted, dim=n, inputs=[self._order, pos, self._ptype, self._pos_sorted,
-                                                     self._ptype_sorted], device=self.device)
-        self.launcher(self._passes.neighbour_list, n, [self.grid, self._pos_sorted, self._ptype_sorted, self._order,
+        wp.launch(self._passes.gather_sorted, dim=n, inputs=[self._order, pos, self._ptype, self._hsml,
+                                                     self._pos_sorted, self._ptype_sorted, self._hsml_sorted],
+                  device=self.device)
+        self.launcher(self._passes.neighbour_list, n, [self.grid, self._pos_sorted, self._ptype_sorted,
+                                                self._hsml_sorted, self._order,
                                                 self._start, self._end, self.nbr, self.count, self._needs_list,
                                                 self._ghost, self.stale, self._x_build, self.overflow])
         wp.launch(self._passes.mark_built, dim=1, inputs=[self.stale, self.builds], device=self.device)

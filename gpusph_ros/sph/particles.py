@@ -14,6 +14,8 @@ class Particles:
     mass: np.ndarray
     ptype: np.ndarray
     body: np.ndarray = field(default=None)
+    # each particle's spacing [m]; None: the scene's dx for all (a refinement zone's are finer)
+    spacing: np.ndarray = field(default=None)
 
     def __post_init__(self):
         n = len(self.pos)
@@ -24,6 +26,8 @@ class Particles:
         self.ptype = np.asarray(self.ptype, dtype=np.int32).reshape(n)
         self.body = (np.full(n, -1, dtype=np.int32) if self.body is None
                      else np.asarray(self.body, dtype=np.int32).reshape(n))
+        if self.spacing is not None:
+            self.spacing = np.asarray(self.spacing, dtype=np.float64).reshape(n)
 
     def __len__(self):
         return len(self.pos)

@@ -50,7 +50,7 @@ def _force_passes(scalar):
     S = state.build(scalar)
     Params, Fields = S.Params, S.Fields
     K = kernels.build(scalar)
-    kernel_w, grad_factor = K.w, K.grad_factor
+    kernel_w, grad_factor, smoothing, own_scale = K.w, K.grad_factor, K.smoothing, K.own_scale
     eos_pressure = eos.build(scalar).pressure
     pressure_gradient = momentum.build(scalar).pressure_gradient
     V = viscosity.build(scalar)
@@ -76,7 +76,8 @@ def _force_passes(scalar):
         """
         zero = vec(scalar(0.0))
         r = wp.length(r_ab)
-        if r >= scalar(2.0) * p.h:
+        h, inv_h, norm, scale = smoothing(p, f.hsml[a], f.hsml[b])
+        if r >= scalar(2.0) * h:
             return zero, scalar(0.0), zero, scalar(0.0), zero
         t_b = f.ptype[b]
         if t_b == BOUNDARY and p.wall_volume == 0:  # walls without fluid volume push
@@ -85,18 +86,18 @@ def _force_passes(scalar):
         rho_a = f.rho[a]
         rho_b = f.rho[b]
         u_ab = f.vel[a] - f.vel[b]
-        grad = r_ab * grad_factor(p.kernel, p.norm, p.inv_h, r)
-        r2_eta = wp.dot(r_ab, r_ab) + p.eta2
+        grad = r_ab * grad_factor(p.kernel, norm, inv_h, r)
+        r2_eta = wp.dot(r_ab, r_ab) + p.eta2 * scale * scale
         drho = continuity(m_b, u_ab, grad)
         if t_b == FLUID and p.delta_hc0 > scalar(0.0):
-            drho += delta_diffusion(p.delta_hc0, rho_a, rho_b, m_b, r_ab, grad, r2_eta, p.gravity, p.rho0, p.c0)
+            drho += delta_diffusion(p.delta_hc0 * scale, rho_a, rho_b, m_b, r_ab, grad, r2_eta, p.gravity, p.rho0, p.c0)
         acc = pressure_gradient(m_b, f.p_rho2[a], f.p_rho2[b], grad)
         if p.viscosity == ARTIFICIAL:
             # c0 for the mean sound speed, as GPUSPH: weak compressibility keeps c within ~1% of c0
             alpha = p.alpha
             if t_b == BOUNDARY:
                 alpha = p.alpha_wall
-            acc += visc_artificial(alpha, p.h, p.c0, scalar(0.5) * (rho_a + rho_b), m_b, u_ab, r_ab, r2_eta,
+            acc += visc_artificial(alpha, h, p.c0, scalar(0.5) * (rho_a + rho_b), m_b, u_ab, r_ab, r2_eta,
                                    grad)
         else:
             acc += visc_laminar(p.nu, rho_a, rho_b, m_b, u_ab, r_ab, r2_eta, grad)
@@ -104,7 +105,7 @@ def _force_passes(scalar):
                 acc += sps_accel(m_b, rho_a, rho_b, f.tau_diag[a], f.tau_off[a], f.tau_diag[b], f.tau_off[b], grad)
         xsph = zero
         if t_b == FLUID and p.xsph_eps > scalar(0.0):
-            xsph = xsph_velocity(p.xsph_eps, m_b, rho_a, rho_b, kernel_w(p.kernel, p.norm, p.inv_h, r), u_ab)
+            xsph = xsph_velocity(p.xsph_eps, m_b, rho_a, rho_b, kernel_w(p.kernel, norm, inv_h, r), u_ab)
         mu = wp.abs(wp.dot(u_ab, r_ab)) / r2_eta
         return acc, drho, xsph, mu, grad
 
@@ -138,10 +139,13 @@ def _force_passes(scalar):
             if f.ptype[j] == FLUID or p.wall_volume != 0:
                 r_ab = separation(grid, f.pos[i], f.pos[j])
                 r = wp.length(r_ab)
-                if r < scalar(2.0) * p.h:
-                    grad = r_ab * grad_factor(p.kernel, p.norm, p.inv_h, r)
+                h, inv_h, norm, scale = smoothing(p, f.hsml[i], f.hsml[j])
+                if r < scalar(2.0) * h:
+                    grad = r_ab * grad_factor(p.kernel, norm, inv_h, r)
                     grad_u += f.mass[j] / f.rho[j] * wp.outer(f.vel[j] - f.vel[i], grad)
-        d, o = sps_stress(grad_u, p.cs_dl2, p.ci_dl2)
+        s2 = own_scale(p, f.hsml[i])
+        s2 = s2 * s2  # the Smagorinsky length is the particle's own spacing
+        d, o = sps_stress(grad_u, p.cs_dl2 * s2, p.ci_dl2 * s2)
         f.tau_diag[i] = d
         f.tau_off[i] = o
 
@@ -160,13 +164,15 @@ def _force_passes(scalar):
         grad_c = vec(scalar(0.0))
         div_r = scalar(0.0)
         close = int(0)
+        scale_i = own_scale(p, f.hsml[i])
         if f.ptype[i] == FLUID:
             a = p.gravity
             mu_max = scalar(0.0)
+            clump_r = p.clump_r * scale_i
             for k in range(count[i]):
                 j = nbr[base + k]
                 r_ij = separation(grid, xi, f.pos[j])
-                if f.ptype[j] == FLUID and wp.dot(r_ij, r_ij) < p.clump_r * p.clump_r:
+                if f.ptype[j] == FLUID and wp.dot(r_ij, r_ij) < clump_r * clump_r:
                     close = 1
                 da, ddr, dxs, mu, grad = pair(p, f, i, j, r_ij)
                 a += da
@@ -178,20 +184,27 @@ def _force_passes(scalar):
                     grad_c += dc
                     div_r += ddiv
             if p.n_planes > 0:
+                h_i, inv_h_i, norm_i, unused = smoothing(p, f.hsml[i], f.hsml[i])
                 ui = f.vel[i]
                 rho_i = f.rho[i]
                 p_i = wp.max(f.pressure[i], scalar(0.0))
                 for k in range(p.n_planes):
                     n_k = plane_normal[k]
-                    da, ddr = plane_wall(p.kernel, p.norm, p.inv_h, p.dim, wp.dot(xi - plane_point[k], n_k), n_k,
+                    da, ddr = plane_wall(p.kernel, norm_i, inv_h_i, p.dim, wp.dot(xi - plane_point[k], n_k), n_k,
                                          p_i, rho_i, ui, p.lj_d, p.plane_r0)
                     a += da
                     dr += ddr
                 if p.n_planes > 1:
-                    a += plane_corners(p.kernel, p.norm, p.inv_h, p.dim, xi, plane_point, plane_normal, p.n_planes,
+                    a += plane_corners(p.kernel, norm_i, inv_h_i, p.dim, xi, plane_point, plane_normal, p.n_planes,
                                        p_i, rho_i)
-            track_max(maxima, 2 * chunk, wp.length(a))
-            track_max(maxima, 2 * chunk + 1, mu_max)
+            if p.variable_h != 0:
+                # choose_dt reads the scene's h: a particle of h_i = s h limits the step as one of the
+                # scene's h with |a| / s and mu + c0 (1/s - 1) / h would (Monaghan 1992's bounds)
+                track_max(maxima, 2 * chunk, wp.length(a) / scale_i)
+                track_max(maxima, 2 * chunk + 1, mu_max + p.c0 * (scalar(1.0) / scale_i - scalar(1.0)) * p.inv_h)
+            else:
+                track_max(maxima, 2 * chunk, wp.length(a))
+                track_max(maxima, 2 * chunk + 1, mu_max)
         elif p.wall_continuity != 0 or f.body[i] >= 0:
             # a boundary particle: its density where it follows the continuity equation (dynamic
             # boundaries; mDBC sets it before the step) and, on a body, the reaction of every fluid
@@ -202,8 +215,9 @@ def _force_passes(scalar):
                 if f.ptype[j] == FLUID:
                     r_ji = separation(grid, f.pos[j], xi)
                     r = wp.length(r_ji)
-                    if p.wall_continuity != 0 and r < scalar(2.0) * p.h:
-                        dr += wall_density_rate(p.kernel, p.norm, p.inv_h, f.mass[j], ui, f.vel[j], r_ji, r)
+                    h, inv_h, norm, scale = smoothing(p, f.hsml[j], f.hsml[i])
+                    if p.wall_continuity != 0 and r < scalar(2.0) * h:
+                        dr += wall_density_rate(p.kernel, norm, inv_h, f.mass[j], ui, f.vel[j], r_ji, r)
                     if f.body[i] >= 0:
                         da, ddr, dxs, mu, grad = pair(p, f, j, i, r_ji)
                         a -= f.mass[j] / f.mass[i] * da
@@ -211,7 +225,7 @@ def _force_passes(scalar):
         drho[i] = dr
         xsph[i] = xs
         if p.shift_a_h != scalar(0.0):
-            shift[i] = shift_velocity(p.shift_a_h, wp.length(f.vel[i]), grad_c, div_r, p.shift_tfs, p.dim)
+            shift[i] = shift_velocity(p.shift_a_h * scale_i, wp.length(f.vel[i]), grad_c, div_r, p.shift_tfs, p.dim)
         clumped[i] = close
 
     @wp.kernel(enable_backward=False, module="unique")
@@ -241,8 +255,7 @@ def _force_passes(scalar):
         if f.ptype[i] != FLUID:
             rho_out[i] = f.rho[i]
             return
-        rho_out[i] = shepard_density(p.kernel, p.norm, p.inv_h, p.wall_volume != 0, grid, nbr, count, i, f.pos,
-                                     f.rho, f.mass, f.ptype)
+        rho_out[i] = shepard_density(p, grid, nbr, count, i, f)
 
     return SimpleNamespace(equation_of_state=equation_of_state, sps_strain=sps_strain, interact=interact,
                            wall_energy=wall_energy,
@@ -257,6 +270,7 @@ def _time_passes(scalar):
     Params = state.build(scalar).Params
     healthy = health.build(scalar).healthy
     capped = shifting.build(scalar).capped
+    own_scale = kernels.build(scalar).own_scale
 
     @wp.kernel(enable_backward=False, module="unique")
     def choose_dt(p: Params, t_target: wp.float64, maxima: wp.array(dtype=scalar), fail: wp.array(dtype=wp.int32),
@@ -278,7 +292,8 @@ def _time_passes(scalar):
             if a_max > scalar(0.0):
                 dt = wp.min(dt, cfl * wp.sqrt(h / wp.float64(a_max)))
             if p.viscosity != ARTIFICIAL and p.nu > scalar(0.0):
-                dt = wp.min(dt, cfl * wp.float64(0.125) * h * h / wp.float64(p.nu))
+                h_min = wp.float64(p.h_min)  # the finest particles bound the viscous step
+                dt = wp.min(dt, cfl * wp.float64(0.125) * h_min * h_min / wp.float64(p.nu))
         clock[DT_STABLE] = dt  # the step the stability limits allow, before landing on t_target
         remaining = t_target - clock[T]
         if remaining <= wp.float64(1.0e-12) * wp.max(wp.float64(1.0), clock[T]):
@@ -292,7 +307,8 @@ def _time_passes(scalar):
     @wp.kernel(enable_backward=False, module="unique")
     def integrate(p: Params, clock: wp.array(dtype=wp.float64), factor: scalar, pos: wp.array(dtype=vec),
                   vel: wp.array(dtype=vec), rho: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
-                  vel_rate: wp.array(dtype=vec), acc: wp.array(dtype=vec), drho: wp.array(dtype=scalar),
+                  hsml: wp.array(dtype=scalar), vel_rate: wp.array(dtype=vec), acc: wp.array(dtype=vec),
+                  drho: wp.array(dtype=scalar),
                   xsph: wp.array(dtype=vec), shift: wp.array(dtype=vec), pos_out: wp.array(dtype=vec),
                   vel_out: wp.array(dtype=vec), rho_out: wp.array(dtype=scalar)):
         """x_out = x + f dt (u_rate + xsph) [+ the shift f dt s, capped], u_out = u + f dt a,
@@ -310,7 +326,7 @@ def _time_passes(scalar):
             return
         x = pos[i] + dt * (vel_rate[i] + xsph[i])
         if p.shift_a_h != scalar(0.0):
-            x += capped(dt * shift[i], p.shift_cap)
+            x += capped(dt * shift[i], p.shift_cap * own_scale(p, hsml[i]))
         for ax in range(3):
             if p.periodic[ax] != 0:
                 span = p.hi[ax] - p.lo[ax]
@@ -344,10 +360,11 @@ def _time_passes(scalar):
 
     @wp.kernel(enable_backward=False, module="unique")
     def permute(order: wp.array(dtype=wp.int32), pos: wp.array(dtype=vec), vel: wp.array(dtype=vec),
-                rho: wp.array(dtype=scalar), mass: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
-                body: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32), needs: wp.array(dtype=wp.int32),
-                ghost: wp.array(dtype=vec), pos_o: wp.array(dtype=vec), vel_o: wp.array(dtype=vec),
-                rho_o: wp.array(dtype=scalar), mass_o: wp.array(dtype=scalar), ptype_o: wp.array(dtype=wp.int32),
+                rho: wp.array(dtype=scalar), mass: wp.array(dtype=scalar), hsml: wp.array(dtype=scalar),
+                ptype: wp.array(dtype=wp.int32), body: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32),
+                needs: wp.array(dtype=wp.int32), ghost: wp.array(dtype=vec), pos_o: wp.array(dtype=vec),
+                vel_o: wp.array(dtype=vec), rho_o: wp.array(dtype=scalar), mass_o: wp.array(dtype=scalar),
+                hsml_o: wp.array(dtype=scalar), ptype_o: wp.array(dtype=wp.int32),
                 body_o: wp.array(dtype=wp.int32), ids_o: wp.array(dtype=wp.int32), needs_o: wp.array(dtype=wp.int32),
                 ghost_o: wp.array(dtype=vec)):
         """Gather the per-particle state into cell order (``order`` from the cell sort)."""
@@ -357,6 +374,7 @@ def _time_passes(scalar):
         vel_o[k] = vel[i]
         rho_o[k] = rho[i]
         mass_o[k] = mass[i]
+        hsml_o[k] = hsml[i]
         ptype_o[k] = ptype[i]
         body_o[k] = body[i]
         ids_o[k] = ids[i]

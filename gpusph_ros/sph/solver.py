@@ -50,24 +50,35 @@ class Solver:
         self.boundary = boundaries.model(cfg.boundary)
         self._fluid_mass = float(particles.mass[particles.ptype == FLUID].sum())
         self.n_fluid = int((particles.ptype == FLUID).sum())
+        spacing = particles.spacing if particles.spacing is not None else np.full(self.n, cfg.dx)
+        if np.any(spacing <= 0.0) or np.any(spacing > cfg.dx * (1.0 + 1.0e-9)):
+            raise ValueError(f"particles: spacings above 0 and at most dx = {cfg.dx:g} m (a refinement zone is "
+                             f"finer than the scene), got {spacing.min():g} to {spacing.max():g} m")
+        self._h_particles = cfg.hdx * spacing
         self.params = self._make_params()
         self.launch = Launcher(self.device, cfg.cpu_threads)
         self._allocate(particles)
         self.neighbours = NeighbourList(self.scalar, cfg.dim, 2.0 * cfg.h, cfg.domain_lo, cfg.domain_hi,
                                         cfg.periodic, self.ptype, self._needs_list, self.ghost,
-                                        max_neighbours or default_max_neighbours(cfg.dim, cfg.hdx),
-                                        self.launch)
+                                        max_neighbours or default_max_neighbours(cfg.dim, cfg.hdx, self.finest),
+                                        self.launch, self.hsml, self.params.variable_h != 0)
         self._launched = 0
         self.time, self.dt, self.dt_stable, self.steps = 0.0, 0.0, 0.0, 0
         self._excluded_host = (np.zeros(health.N_REASONS, dtype=np.int32), np.array([0.0, -1.0]))
         self._census_host = np.array(health.CENSUS_START)  # as of the last sync
+
+    @property
+    def finest(self) -> float:
+        """The finest particle spacing over the scene's dx: 1 without refinement zones."""
+        return float(self._h_particles.min()) / self.config.h
 
     # -- set-up -------------------------------------------------------------------------
     def _make_params(self):
         """The Params struct the passes read: each model module gives the fields of its model."""
         cfg = self.config
         p = self._passes.Params()
-        fields = {**passes.params(cfg), **kernels.params(cfg), **eos.params(cfg), **viscosity.params(cfg),
+        fields = {**passes.params(cfg), **kernels.params(cfg, float(self._h_particles.min())), **eos.params(cfg),
+                  **viscosity.params(cfg),
                   **density.params(cfg), **xsph.params(cfg), **shifting.params(cfg), **boundaries.params(cfg),
                   **health.params(cfg, self._fluid_mass, self.n_fluid)}
         declared = self._passes.Params.vars
@@ -90,6 +101,7 @@ class Solver:
         self.vel = arr(particles.vel, v)
         self.rho = arr(particles.rho, s)
         self.mass = arr(particles.mass, s)
+        self.hsml = arr(self._h_particles, s)
         self.ptype = arr(particles.ptype, wp.int32)
         self.body = arr(particles.body, wp.int32)
         # the arrays are kept in cell order; ids maps each slot back to the caller's particle
@@ -99,8 +111,8 @@ class Solver:
         needs = (particles.ptype == FLUID) | (particles.body >= 0) | self.boundary.volume
         self._needs_list = arr(needs.astype(np.int32), wp.int32)
         self.ghost = wp.zeros(n, dtype=v, device=dev)  # mDBC's ghost-node offsets (boundaries/mdbc.py); else zero
-        self._sorted = [wp.empty_like(a) for a in (self.pos, self.vel, self.rho, self.mass, self.ptype, self.body,
-                                                   self.ids, self._needs_list, self.ghost)]
+        self._sorted = [wp.empty_like(a) for a in (self.pos, self.vel, self.rho, self.mass, self.hsml, self.ptype,
+                                                   self.body, self.ids, self._needs_list, self.ghost)]
         self.pressure = wp.zeros(n, dtype=s, device=dev)
         # half-step and candidate states, rates of change
         self._pos_h, self._vel_h, self._rho_h = (wp.zeros_like(a) for a in (self.pos, self.vel, self.rho))
@@ -109,7 +121,7 @@ class Solver:
         self._shift = wp.zeros(n, dtype=v, device=dev)
         self._drho = wp.zeros(n, dtype=s, device=dev)
         shared = dict(pressure=self.pressure, p_rho2=wp.zeros(n, dtype=s, device=dev), mass=self.mass,
-                      ptype=self.ptype, body=self.body, tau_diag=wp.zeros(n, dtype=v, device=dev),
+                      hsml=self.hsml, ptype=self.ptype, body=self.body, tau_diag=wp.zeros(n, dtype=v, device=dev),
                       tau_off=wp.zeros(n, dtype=v, device=dev))
         self.fields = self._make_fields(self.pos, self.vel, self.rho, shared)
         self._fields_h = self._make_fields(self._pos_h, self._vel_h, self._rho_h, shared)
@@ -155,8 +167,8 @@ class Solver:
                                     self._drho, self._xsph, self._shift, self._maxima, self._clumped])
 
     def _reorder(self):
-        state = [self.pos, self.vel, self.rho, self.mass, self.ptype, self.body, self.ids, self._needs_list,
-                 self.ghost]
+        state = [self.pos, self.vel, self.rho, self.mass, self.hsml, self.ptype, self.body, self.ids,
+                 self._needs_list, self.ghost]
         order = self.neighbours.sort(self.pos)
         wp.launch(self._passes.permute, dim=self.n, inputs=[order, *state, *self._sorted], device=self.device)
         for dst, src in zip(state, self._sorted):
@@ -173,15 +185,16 @@ class Solver:
         self._forces(self.fields)
         wp.launch(k.choose_dt, dim=1, inputs=[p, t_target, self._maxima, self._fail, self._clock], device=dev)
         wp.launch(k.integrate, dim=n,
-                  inputs=[p, self._clock, 0.5, self.pos, self.vel, self.rho, self.ptype, self.vel, self.acc,
+                  inputs=[p, self._clock, 0.5, self.pos, self.vel, self.rho, self.ptype, self.hsml, self.vel, self.acc,
                           self._drho, self._xsph, self._shift, self._pos_h, self._vel_h, self._rho_h], device=dev)
         self._forces(self._fields_h)
         wp.launch(k.integrate, dim=n,
-                  inputs=[p, self._clock, 1.0, self.pos, self.vel, self.rho, self.ptype, self._vel_h, self.acc,
-                          self._drho, self._xsph, self._shift, self._pos_c, self._vel_c, self._rho_c], device=dev)
+                  inputs=[p, self._clock, 1.0, self.pos, self.vel, self.rho, self.ptype, self.hsml, self._vel_h,
+                          self.acc, self._drho, self._xsph, self._shift, self._pos_c, self._vel_c, self._rho_c],
+                  device=dev)
         wp.launch(k.check_particles, dim=n,
-                  inputs=[p, self.pos, self._pos_c, self._vel_c, self._rho_c, self.mass, self.ptype, self.ids,
-                          self.solid_lo, self.solid_hi, self._fail, self._faulty, self._pending,
+                  inputs=[p, self.pos, self._pos_c, self._vel_c, self._rho_c, self.mass, self.hsml, self.ptype,
+                          self.ids, self.solid_lo, self.solid_hi, self._fail, self._faulty, self._pending,
                           self._pending_mass], device=dev)
         if self._launched % _CENSUS_EVERY == 0:
             self._energy_sum[health.ENERGY:health.ENERGY + 1].zero_()

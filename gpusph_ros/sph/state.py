@@ -28,9 +28,12 @@ def build(scalar):
         dx: scalar  # the particle spacing
         kernel: int
         norm: scalar
-        h: scalar
+        h: scalar  # the scene's smoothing length, hdx dx; a refined particle's own is f.hsml
         inv_h: scalar
         eta2: scalar  # 0.01 h^2 regulariser
+        norm_unit: scalar  # a_D h^dim: the kernel's normalisation for h = 1
+        variable_h: int  # 1: the particles' smoothing lengths differ (refinement zones): pairs use f.hsml
+        h_min: scalar  # the smallest smoothing length of any particle
         viscosity: int
         alpha: scalar
         alpha_wall: scalar  # alpha x visco_bound_factor, for pairs with a boundary particle
@@ -90,6 +93,7 @@ def build(scalar):
         pressure: wp.array(dtype=scalar)
         p_rho2: wp.array(dtype=scalar)  # p / rho^2, once per particle instead of once per pair
         mass: wp.array(dtype=scalar)
+        hsml: wp.array(dtype=scalar)  # each particle's smoothing length, hdx x its spacing
         ptype: wp.array(dtype=wp.int32)
         body: wp.array(dtype=wp.int32)
         tau_diag: wp.array(dtype=vec)  # SPS stress / rho: xx, yy, zz

@@ -87,7 +87,7 @@ def build(scalar):
     vec4 = wp.types.vector(4, scalar)
     mat44 = wp.types.matrix((4, 4), scalar)
     K = kernels.build(scalar)
-    kernel_w, grad_factor = K.w, K.grad_factor
+    kernel_w, grad_factor, smoothing, own_scale = K.w, K.grad_factor, K.smoothing, K.own_scale
     N = neighbours.grid(scalar)
     Grid, separation, cell_coord, cells_around, cell_around = (N.Grid, N.separation, N.cell_coord, N.cells_around,
                                                                 N.cell_around)
@@ -121,14 +121,16 @@ def build(scalar):
         return off
 
     @wp.func
-    def ghost_term(p: Params, grid: Grid, f: Fields, xg: vec, j: int, a: mat44, rhs: vec4, u: vec):
+    def ghost_term(p: Params, grid: Grid, f: Fields, xg: vec, h_g: scalar, j: int, a: mat44, rhs: vec4, u: vec):
         """Fluid particle j's part of the correction matrix A, of the right-hand side
-        [sum m W, sum m grad W] and of sum V W u at the ghost node xg (nothing beyond the support)."""
+        [sum m W, sum m grad W] and of sum V W u at the ghost node xg of smoothing length h_g
+        (nothing beyond the support)."""
         r_gj = separation(grid, xg, f.pos[j])
         r = wp.length(r_gj)
-        if r < scalar(2.0) * p.h:
-            w = kernel_w(p.kernel, p.norm, p.inv_h, r)
-            gw = r_gj * grad_factor(p.kernel, p.norm, p.inv_h, r)
+        h, inv_h, norm, scale = smoothing(p, h_g, f.hsml[j])
+        if r < scalar(2.0) * h:
+            w = kernel_w(p.kernel, norm, inv_h, r)
+            gw = r_gj * grad_factor(p.kernel, norm, inv_h, r)
             m = f.mass[j]
             v = m / f.rho[j]
             row = vec4(w, gw[0], gw[1], gw[2])
@@ -146,7 +148,7 @@ def build(scalar):
         return out
 
     @wp.func
-    def ghost_density(p: Params, a: mat44, rhs: vec4) -> scalar:
+    def ghost_density(p: Params, a: mat44, rhs: vec4, h_g: scalar) -> scalar:
         """The fluid's density at the ghost node from its sums: first order where A is well
         conditioned (its determinant at least DETERMINANT_LIMIT and its condition number, scaled by
         dx^2, at most CONDITION_LIMIT), else the Shepard sum; where the ghost's kernel sum is a thin
@@ -159,7 +161,8 @@ def build(scalar):
             a[3, 3] = scalar(1.0)  # the unused axis
         if wp.abs(wp.determinant(a)) >= scalar(DETERMINANT_LIMIT):
             inv = wp.inverse(a)
-            if p.dx * p.dx * inf_norm(a) * inf_norm(inv) <= scalar(CONDITION_LIMIT):
+            dx = p.dx * own_scale(p, h_g)
+            if dx * dx * inf_norm(a) * inf_norm(inv) <= scalar(CONDITION_LIMIT):
                 return (inv * rhs)[0]
         return rhs[0] / a[0, 0]
 
@@ -201,9 +204,10 @@ def build(scalar):
         rhs = vec4(scalar(0.0))
         u = vec(scalar(0.0))
         base = i * grid.max_neighbours
+        h_g = f.hsml[i]
         for k in range(count[i]):
-            a, rhs, u = ghost_term(p, grid, f, xg, nbr[base + k], a, rhs, u)
-        f.rho[i] = tait_density(p, cloned_pressure(p, ghost_density(p, a, rhs), -off))
+            a, rhs, u = ghost_term(p, grid, f, xg, h_g, nbr[base + k], a, rhs, u)
+        f.rho[i] = tait_density(p, cloned_pressure(p, ghost_density(p, a, rhs, h_g), -off))
         u_b = vec(scalar(0.0))
         if a[0, 0] > scalar(0.0):
             u_g = u / a[0, 0]
@@ -225,6 +229,7 @@ def build(scalar):
         A measurement: the fluid is found through the cell grid (``order`` maps its slots)."""
         k = wp.tid()
         off = dx * normals[k]
+        h_g = p.h * dx / p.dx  # a face reads at its own spacing
         xg = points[k] + off
         a = mat44(scalar(0.0))
         rhs = vec4(scalar(0.0))
@@ -235,11 +240,11 @@ def build(scalar):
             if cell >= 0:
                 for s in range(start[cell], end[cell]):
                     if f.ptype[order[s]] == FLUID:
-                        a, rhs, u = ghost_term(p, grid, f, xg, order[s], a, rhs, u)
+                        a, rhs, u = ghost_term(p, grid, f, xg, h_g, order[s], a, rhs, u)
         weight[k] = a[0, 0]
         pressure[k] = scalar(0.0)
         if a[0, 0] > scalar(0.0):
-            pressure[k] = cloned_pressure(p, ghost_density(p, a, rhs), -off)
+            pressure[k] = cloned_pressure(p, ghost_density(p, a, rhs, h_g), -off)
 
     return SimpleNamespace(ghost_offset=ghost_offset, ghost_offsets=ghost_offsets, boundary_state=boundary_state,
                            face_pressure=face_pressure)
