@@ -127,11 +127,15 @@ def test_a_band_around_an_obstacle_and_nested_zones():
     pier = {"name": "pier", "lo": [0.4, 0.0], "hi": [0.44, 0.1]}
     zones = [{"name": "near", "around": "pier", "margin": 0.1, "ratio": 0.5},
              {"name": "close", "around": "pier", "margin": 0.04, "ratio": 0.25}]
-    sc = scene(fluid=[{"name": "water", "lo": [0.0, 0.0], "hi": [0.3, 0.2]}], obstacles=[pier], refine=zones)
+    sc_fluid = [{"name": "water", "lo": [0.0, 0.0], "hi": [0.3, 0.2]}]
+    sc = scene(fluid=sc_fluid, obstacles=[pier], refine=zones)
     assert [z.name for z in sc.refine] == ["near", "close"]
     assert np.allclose([z.lo[:2] + z.hi[:2] for z in sc.refine], [(0.3, 0.0, 0.54, 0.2), (0.36, 0.0, 0.48, 0.14)])
     with pytest.raises(ConfigError, match=r"refine\[1\].*at least 0.065 m"):
         build(sc, dx=0.05)  # 'close' sits 0.06 m inside 'near': less than the 0.5 level's support at this dx
+    reversed_order = scene(fluid=sc_fluid, obstacles=[pier], refine=zones[::-1])
+    with pytest.raises(ConfigError, match=r"refine\[0\].*at least 0.065 m"):  # the file's index, not the level's
+        build(reversed_order, dx=0.05)
     parts = build(sc, dx=0.01).particles
     assert sorted(np.unique(parts.spacing)) == [0.0025, 0.005, 0.01]
     pier_particles = parts.body == 0

@@ -57,7 +57,7 @@ def split(columns: dict, spacing: np.ndarray, zones, tank, dim: int, dx: float, 
     with every particle in a zone replaced by its daughters at the zone's spacing. ``stratify(rho,
     dz)``, if given, is the density a daughter dz above its parent of density rho starts with (the
     hydrostatic profile the lattice was built on), else the parent's."""
-    for zone in zones:  # coarse to fine
+    for zone in sorted(zones, key=lambda z: -z.ratio):  # coarse to fine: a fine zone splits its parent's daughters
         target = zone.ratio * dx
         lo, hi = zone_bounds(zone, tank, dim)
         pos = columns["pos"]

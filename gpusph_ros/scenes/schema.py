@@ -103,7 +103,7 @@ class Scene:
     walls: dict = field(default_factory=dict)
     wet_bed: float = 0.0
     obstacles: list = field(default_factory=list)
-    refine: list = field(default_factory=list)  # Zones, coarse to fine
+    refine: list = field(default_factory=list)  # Zones, in the file's order
     probes: list = field(default_factory=list)
     run_settings: dict = field(default_factory=dict)  # the file's `run:` section (settings.py)
     # the file's `analysis:` section: which comparison its recordings get (ANALYSES), and whether the
@@ -324,14 +324,12 @@ def _zones(items, tank, dim, obstacles) -> list:
             _, name, lo, hi = _box(where, {key: item[key] for key in ("name", "lo", "hi") if key in item}, tank, dim)
             zones.append(Zone(name, lo, hi, float(ratio)))
     _unique("refine", [z.name for z in zones])
-    zones.sort(key=lambda z: -z.ratio)
-    for z in zones:
+    for k, z in enumerate(zones):
         if z.ratio < max(ZONE_RATIOS) and not any(
                 p.ratio == 2 * z.ratio and all(p.lo[ax] <= z.lo[ax] and z.hi[ax] <= p.hi[ax] for ax in range(dim))
                 for p in zones):
-            raise ConfigError(f"refine[{[i.get('name') for i in items].index(z.name)}]", z.name,
-                              f"a zone inside a zone of ratio {2 * z.ratio:g} (each level halves the spacing of the "
-                              "one around it)")
+            raise ConfigError(f"refine[{k}]", z.name, f"a zone inside a zone of ratio {2 * z.ratio:g} (each level "
+                                                      "halves the spacing of the one around it)")
     return zones
 
 
