@@ -13,7 +13,7 @@ import numpy as np
 
 from ..sph import boundaries
 from ..sph.config import ConfigError, Plane, SolverConfig, check_device
-from ..sph.eos import hydrostatic_density
+from ..sph.eos import hydrostatic_density, hydrostatic_depth
 from ..sph.particles import Particles
 from ..sph.solver import Solver
 from ..sph.state import BOUNDARY, FLUID
@@ -96,7 +96,7 @@ def floor_rectangles(extent, footprints, dim: int) -> list:
 def restratify(rho, dz, cfg: SolverConfig):
     """The density dz above a particle of density rho on the hydrostatic profile it was built on
     (boxes.box_tank: Tait's law at rho0 g d); a dry particle (rho0) stays at rho0."""
-    depth = cfg.eos_b * ((np.asarray(rho) / cfg.rho0) ** cfg.gamma - 1.0) / (cfg.rho0 * cfg.g_norm)
+    depth = hydrostatic_depth(rho, cfg.rho0, cfg.eos_b, cfg.gamma, cfg.g_norm)
     return np.where(depth > 0.0, hydrostatic_density(depth - dz, cfg.rho0, cfg.eos_b, cfg.gamma, cfg.g_norm), rho)
 
 
@@ -106,10 +106,10 @@ def _check_refinable(scene: Scene, cfg: SolverConfig):
     if boundaries.model(cfg.boundary).repulsive:
         raise ConfigError("boundary", cfg.boundary, "dynamic or mdbc with refinement zones (refine:): a repulsive "
                                                     "wall's force constants are set for one spacing")
-    planes = [face for face, kind in scene.walls.items() if kind != "particles"]
-    if planes or cfg.planes:
-        raise ConfigError("walls", {face: scene.walls[face] for face in planes} or "planes",
-                          "particles with refinement zones (refine:): a plane's repulsion distance is one spacing")
+    planes = {face: kind for face, kind in scene.walls.items() if kind != "particles"}
+    if planes:
+        raise ConfigError("walls", planes, "particles with refinement zones (refine:): a plane's repulsion distance "
+                                           "is one spacing")
 
 
 def build_run(scene: Scene, run_config) -> Model:

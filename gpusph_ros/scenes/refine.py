@@ -71,10 +71,10 @@ def split(columns: dict, spacing: np.ndarray, zones, tank, dim: int, dx: float, 
             parents = np.flatnonzero(inside)[ks == k]
             offsets = sub_offsets(int(k), dim)
             daughters = len(offsets)
+            shift = np.tile(offsets, (len(parents), 1)) * np.repeat(spacing[parents], daughters)[:, None]
             for name, values in columns.items():
                 rows = np.repeat(values[parents], daughters, axis=0)
                 if name == "pos":
-                    shift = np.tile(offsets, (len(parents), 1)) * np.repeat(spacing[parents], daughters)[:, None]
                     rows = rows + shift
                 elif name == "mass":
                     rows = rows / daughters

@@ -5,7 +5,8 @@
 - elastic_energy: the work of compression per unit mass, e(rho) = int_rho0^rho p / rho'^2 drho' =
   B / rho0 ((rho / rho0)^(gamma - 1) - 1) / (gamma - 1) + B (1 / rho - 1 / rho0), the Tait law
   integrated; the energy check (health.py) adds it to the kinetic and potential energy.
-- hydrostatic_density: the Tait law inverted at p = rho0 g d, for the initial state.
+- hydrostatic_density: the Tait law inverted at p = rho0 g d, for the initial state;
+  hydrostatic_depth, the depth d at which a fluid at rest has density rho (p(rho) / (rho0 g)).
 """
 
 import functools
@@ -43,3 +44,9 @@ def hydrostatic_density(depth, rho0: float, b: float, gamma: float, g: float):
     """
     p = rho0 * g * np.maximum(np.asarray(depth, dtype=np.float64), 0.0)
     return rho0 * (1.0 + p / b) ** (1.0 / gamma)
+
+
+def hydrostatic_depth(rho, rho0: float, b: float, gamma: float, g: float):
+    """The depth below a free surface at rest at which the density is ``rho``: the Tait law
+    (Eq. 2.12) over rho0 g, hydrostatic_density's inverse (0 at rho0, negative below it)."""
+    return b * ((np.asarray(rho, dtype=np.float64) / rho0) ** gamma - 1.0) / (rho0 * g)
