@@ -143,6 +143,15 @@ def test_a_band_around_an_obstacle_and_nested_zones():
 
 
 @pytest.mark.unit
+def test_zones_that_would_pass_max_particles_are_refused_before_they_are_made():
+    plain = len(build(scene(), dx=0.02).particles)  # 504; the uniform bound (resources.particle_bound) 612
+    with pytest.raises(ConfigError, match=r"refine.*coarser or smaller zones: the zones make 894 particles.*"
+                                          r"max_particles is 800"):
+        build(scene(refine=[MIDDLE]), dx=0.02, max_particles=800)
+    assert len(build(scene(refine=[MIDDLE]), dx=0.02, max_particles=894).particles) == 894 > plain
+
+
+@pytest.mark.unit
 @pytest.mark.parametrize("numerics, field", [({"boundary": "lennard_jones"}, "boundary"),
                                              ({"boundary": "monaghan_kajtar"}, "boundary")])
 def test_walls_that_hold_one_spacing_are_refused_with_zones(numerics, field):

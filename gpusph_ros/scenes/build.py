@@ -169,7 +169,10 @@ def build_from(scene: Scene, cfg: SolverConfig) -> Model:
         _check_refinable(scene, cfg)
         refine.check_nesting(scene.refine, scene.tank, dim, dx, cfg.hdx)
         columns, spacing = refine.split(columns, np.full(len(columns["pos"]), dx), scene.refine, scene.tank, dim, dx,
-                                        stratify=lambda rho, dz: restratify(rho, dz, cfg))
+                                        stratify=lambda rho, dz: restratify(rho, dz, cfg),
+                                        limit=lambda n: resources.check_count(
+                                            n, cfg, "refine", [z.name for z in scene.refine], "the zones make",
+                                            "coarser or smaller zones", refined=True))
     pos = columns["pos"] + np.asarray(scene.origin)
     if any(scene.origin):
         def move(point):

@@ -52,11 +52,12 @@ def sub_offsets(k: int, dim: int) -> np.ndarray:
     return out
 
 
-def split(columns: dict, spacing: np.ndarray, zones, tank, dim: int, dx: float, stratify=None):
+def split(columns: dict, spacing: np.ndarray, zones, tank, dim: int, dx: float, stratify=None, limit=None):
     """``columns`` (name -> per-particle array: pos, rho, mass, ptype, body, ...) and ``spacing``
     with every particle in a zone replaced by its daughters at the zone's spacing. ``stratify(rho,
     dz)``, if given, is the density a daughter dz above its parent of density rho starts with (the
-    hydrostatic profile the lattice was built on), else the parent's."""
+    hydrostatic profile the lattice was built on), else the parent's. ``limit(n)``, if given, is
+    asked before each level is made whether n particles may be (it raises if not)."""
     for zone in sorted(zones, key=lambda z: -z.ratio):  # coarse to fine: a fine zone splits its parent's daughters
         target = zone.ratio * dx
         lo, hi = zone_bounds(zone, tank, dim)
@@ -65,6 +66,8 @@ def split(columns: dict, spacing: np.ndarray, zones, tank, dim: int, dx: float, 
         if not inside.any():
             continue
         ks = np.rint(spacing[inside] / target).astype(int)
+        if limit is not None:
+            limit(len(spacing) + int((ks ** dim - 1).sum()))
         new = {name: [] for name in columns}
         new_spacing = []
         for k in np.unique(ks):

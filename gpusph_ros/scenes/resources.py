@@ -7,6 +7,8 @@ Memory per particle (measured with ``Solver.device_bytes`` on DamBreak 1 and the
 checked by the tests): the neighbour list, 4 bytes x ``default_max_neighbours`` (248 in 3D, 72 in
 2D at h = 1.3 dx), and 63 scalars of state, half-step, candidate and scratch arrays plus 68 bytes
 of integers. Building the particles on the host takes about HOST_BYTES a particle more.
+Refinement zones are counted exactly as they are split, each level before it is made
+(``check_count``, from refine.split), with the wider lists a refined run holds.
 """
 import math
 from pathlib import Path
@@ -43,10 +45,12 @@ def particle_bound(scene, cfg: SolverConfig, fluid_boxes) -> int:
     return n
 
 
-def device_bytes(n: int, cfg: SolverConfig) -> int:
-    """The device memory a solver of ``n`` particles takes (an estimate within a few percent)."""
+def device_bytes(n: int, cfg: SolverConfig, refined: bool = False) -> int:
+    """The device memory a solver of ``n`` particles takes (an estimate within a few percent);
+    ``refined``: with refinement zones, whose lists are wider."""
     scalar = 8 if cfg.precision == "float64" else 4
-    return n * (4 * default_max_neighbours(cfg.dim, cfg.hdx) + _SCALARS * scalar + _INTEGER_BYTES)
+    finest = 0.5 if refined else 1.0
+    return n * (4 * default_max_neighbours(cfg.dim, cfg.hdx, finest) + _SCALARS * scalar + _INTEGER_BYTES)
 
 
 def host_free_bytes() -> int:
@@ -74,17 +78,23 @@ def _gib(b: float) -> str:
 def check(scene, cfg: SolverConfig, fluid_boxes):
     """ConfigError on dx when the model would pass ``max_particles`` or the free memory."""
     n = particle_bound(scene, cfg, fluid_boxes)
-    need = device_bytes(n, cfg)
+    return check_count(n, cfg, "dx", cfg.dx, f"dx = {cfg.dx:g} m needs up to", "a coarser spacing")
+
+
+def check_count(n: int, cfg: SolverConfig, field: str, value, needs: str, remedy: str, refined: bool = False):
+    """ConfigError on ``field`` (its ``value``: "``remedy``: ``needs`` n particles, ...") when ``n``
+    particles would pass ``max_particles`` or the free memory; (n, device bytes) otherwise."""
+    need = device_bytes(n, cfg, refined)
     cpu = cfg.device == "cpu"
     host = n * HOST_BYTES + (need if cpu else 0)
     free_dev = None if cpu else device_free_bytes(cfg.device)
     free_host = host_free_bytes()
-    plan = f"dx = {cfg.dx:g} m needs up to {n:.3g} particles, {_gib(need)} on {cfg.device}"
+    plan = f"{needs} {n:.3g} particles, {_gib(need)} on {cfg.device}"
     if n > cfg.max_particles:
-        raise ConfigError("dx", cfg.dx, f"a coarser spacing: {plan}; max_particles is {cfg.max_particles:,}")
+        raise ConfigError(field, value, f"{remedy}: {plan}; max_particles is {cfg.max_particles:,}")
     if free_dev is not None and need > USABLE * free_dev:
-        raise ConfigError("dx", cfg.dx, f"a coarser spacing: {plan}; {cfg.device} has {_gib(free_dev)} free")
+        raise ConfigError(field, value, f"{remedy}: {plan}; {cfg.device} has {_gib(free_dev)} free")
     if host > USABLE * free_host:
-        raise ConfigError("dx", cfg.dx, f"a coarser spacing: {plan} and {_gib(host)} of host memory in all; "
+        raise ConfigError(field, value, f"{remedy}: {plan} and {_gib(host)} of host memory in all; "
                                         f"this machine has {_gib(free_host)} free")
     return n, need
