@@ -1,25 +1,27 @@
-"""Refinement zones (scene ``refine:``, scenes/refine.py) and particles of differing smoothing
-length (kernels.smoothing: pairs at h_ab = (h_a + h_b) / 2).
+"""Refinement zones (scene ``refine:``, scenes/refine.py) as levels coupled through passive
+particles (sph/levels.py, adaptive particle refinement).
 
-- A zone splits each particle in it into 2^dim daughters on its cell's sub-lattice: mass exact,
-  the cells tiled, walls in the zone split too, densities on the hydrostatic profile.
+- A zone gives each particle in it 2^dim daughters on its cell's sub-lattice, active; the fluid
+  parents stay as passive particles of the coarse level, and a band of passive fine fluid (and
+  fine walls) one fine kernel support wide lies outside the zone. The active mass is exact, the
+  active fine fluid is the uniform fine lattice, densities are on the hydrostatic profile.
 - A zone over the whole tank runs as the uniform run at the zone's spacing, to round-off in
-  float64 (the per-pair smoothing lengths, the lists, the step and mDBC's ghosts on that path).
-- Across an interface between spacings the pair forces stay antisymmetric: in a periodic box the
-  fluid's momentum changes by M g t only, to round-off.
+  float64: no level reads another's pairs.
+- A passive particle takes the active level's fields by a first-order interpolation: a linear
+  density exactly, a uniform velocity exactly.
+- A still tank with a zone across its surface stays still and hydrostatic on both sides.
+- Fluid that crosses a zone's edge fails the run (zone_edge): particles do not change level yet.
 - A zone that cannot be built is refused naming the field.
 """
 import numpy as np
 import pytest
 
-from gpusph_ros.scenes import refine
-from gpusph_ros.scenes.boxes import lattice
 from gpusph_ros.scenes.build import build
-from gpusph_ros.scenes.schema import Zone, parse_scene
-from gpusph_ros.sph import Solver, SolverConfig
+from gpusph_ros.scenes.schema import parse_scene
 from gpusph_ros.sph.config import ConfigError
 from gpusph_ros.sph.eos import hydrostatic_density
-from gpusph_ros.sph.particles import Particles
+from gpusph_ros.sph.health import HealthError
+from gpusph_ros.sph.state import PASSIVE
 
 TANK = {"name": "tank", "dim": 2, "tank": [0.6, 0.32],
         "fluid": [{"name": "water", "lo": [0.0, 0.0], "hi": [0.6, 0.2]}]}
@@ -31,28 +33,38 @@ def scene(**changes):
 
 
 @pytest.mark.unit
-def test_a_zone_splits_its_particles_into_daughters_that_tile_their_cells():
+def test_a_zone_adds_a_fine_level_over_passive_coarse_fluid_and_a_passive_fine_band():
     dx = 0.02
     plain = build(scene(), dx=dx).particles
     zoned = build(scene(refine=[MIDDLE]), dx=dx)
-    parts = zoned.particles
+    parts, cfg = zoned.particles, zoned.config
     inside = (plain.pos[:, 0] >= 0.2) & (plain.pos[:, 0] <= 0.4)  # the zone reaches the floor: its walls too
-    assert len(parts) == (~inside).sum() + 4 * inside.sum()
-    for kind in (0, 1):
-        assert parts.mass[parts.ptype == kind].sum() == pytest.approx(plain.mass[plain.ptype == kind].sum(), rel=1e-12)
     fine = parts.spacing < dx
-    assert np.all(parts.spacing[fine] == dx / 2) and fine.sum() == 4 * inside.sum()
-    assert np.all((parts.pos[fine, 0] > 0.2) & (parts.pos[fine, 0] < 0.4))
-    assert ((parts.ptype == 1) & fine).sum() == 4 * ((plain.ptype == 1) & inside).sum() > 0
-    # each daughter a quarter spacing from its parent's centre along each axis, so the fine lattice
-    # is the dx / 2 lattice: every fine fluid particle is a uniform dx / 2 fill's
+    assert np.all(parts.spacing[fine] == dx / 2)
+    # the coarse level is the plain lattice, its fluid in the zone passive
+    coarse = ~fine
+    assert np.array_equal(parts.pos[coarse], plain.pos)
+    assert np.array_equal(parts.ptype[coarse], np.where(inside & (plain.ptype == 0), PASSIVE, plain.ptype))
+    # the active fluid's mass is the scene's, exactly; the active fine fluid is a uniform dx / 2 fill
+    assert parts.mass[parts.ptype == 0].sum() == pytest.approx(plain.mass[plain.ptype == 0].sum(), rel=1e-12)
     uniform = build(scene(), dx=dx / 2).particles
-    fluid_fine = parts.pos[fine & (parts.ptype == 0)]
-    ref = uniform.pos[(uniform.ptype == 0) & (uniform.pos[:, 0] > 0.2) & (uniform.pos[:, 0] < 0.4)]
-    assert np.allclose(np.sort(fluid_fine[:, 0] + 1j * fluid_fine[:, 1]), np.sort(ref[:, 0] + 1j * ref[:, 1]))
-    # each on the hydrostatic profile at its own depth below the surface
-    cfg = zoned.config
-    f = fine & (parts.ptype == 0)
+    uniform_fluid = uniform.pos[uniform.ptype == 0]
+
+    def same_points(a, b):
+        return np.allclose(np.sort(a[:, 0] + 1j * a[:, 1]), np.sort(b[:, 0] + 1j * b[:, 1]))
+
+    in_zone = (uniform_fluid[:, 0] > 0.2) & (uniform_fluid[:, 0] < 0.4)
+    assert same_points(parts.pos[fine & (parts.ptype == 0)], uniform_fluid[in_zone])
+    # the passive fine band: the rest of that fill within a fine support (and half a spacing) of the zone
+    reach = 2.0 * cfg.hdx * dx / 2 + dx / 4
+    gap = np.maximum(0.2 - uniform_fluid[:, 0], uniform_fluid[:, 0] - 0.4)
+    assert same_points(parts.pos[fine & (parts.ptype == PASSIVE)], uniform_fluid[(gap > 0) & (gap <= reach)])
+    # fine walls: the daughters of the walls in the zone and in the band
+    fine_walls = parts.pos[fine & (parts.ptype == 1)]
+    assert len(fine_walls) >= 4 * ((plain.ptype == 1) & inside).sum() > 0
+    assert np.all(np.maximum(0.2 - fine_walls[:, 0], fine_walls[:, 0] - 0.4) <= reach)
+    # each fine particle on the hydrostatic profile at its own depth below the surface
+    f = fine & (parts.ptype != 1)
     expected = hydrostatic_density(0.2 - parts.pos[f, 1], cfg.rho0, cfg.eos_b, cfg.gamma, cfg.g_norm)
     assert np.allclose(parts.rho[f], expected, rtol=1e-12)
 
@@ -79,31 +91,57 @@ def test_a_zone_over_the_whole_tank_runs_as_the_uniform_run_at_its_spacing(bound
 
 
 @pytest.mark.physics
-def test_momentum_crosses_an_interface_between_spacings_to_round_off():
-    L, dx = 0.2, 0.01
-    cfg = SolverConfig(dim=2, dx=dx, gravity=(0.0, -9.81, 0.0), depth=0.1, domain_lo=(0.0, 0.0, -1.0),
-                       domain_hi=(L, L, 1.0), periodic=(True, True, False), precision="float64",
-                       energy_growth_ratio=0.0)  # falling through a periodic floor gains energy
-    pos = lattice((0.0, 0.0), (L, L), dx, 2)
-    n = len(pos)
-    vel = np.zeros((n, 3))
-    vel[:, :2] = 0.05 * np.random.default_rng(1).standard_normal((n, 2))
-    columns = {"pos": pos, "vel": vel, "rho": np.full(n, 1000.0), "mass": np.full(n, 1000.0 * dx * dx),
-               "ptype": np.zeros(n, np.int32), "body": np.full(n, -1, np.int32)}
-    zone = Zone("middle", (0.06, 0.06, 0.0), (0.14, 0.14, 0.0), 0.5)
-    columns, spacing = refine.split(columns, np.full(n, dx), [zone], (L, L, 0.0), 2, dx)
-    parts = Particles(spacing=spacing, **columns)
-    assert len(parts) == n + 3 * 64
-    solver = Solver(cfg, parts)
-    mass = parts.mass.sum()
-    start = (parts.mass[:, None] * parts.vel).sum(axis=0)
-    solver.advance(0.1)
+def test_passive_particles_take_the_active_levels_linear_density_and_uniform_velocity():
+    model = build(scene(refine=[MIDDLE]), dx=0.02, precision="float64", dt_fixed=1e-6)
+    parts = model.particles
+    x, y = parts.pos[:, 0], parts.pos[:, 1]
+    fluid = np.isin(parts.ptype, (0, PASSIVE))
+    parts.rho[fluid] = 1000.0 + 20.0 * x[fluid] - 40.0 * y[fluid]  # any linear field: not the profile built
+    parts.vel[fluid] = (0.1, -0.05, 0.0)
+    solver = model.solver()
+    solver.step()  # the passive particles take the half step's fields: 5e-7 s from these
     snap = solver.snapshot()
-    momentum = (snap["mass"][:, None] * snap["vel"]).sum(axis=0) - mass * np.asarray(cfg.gravity) * solver.time
-    scale = (snap["mass"] * np.linalg.norm(snap["vel"], axis=1)).sum()
-    assert np.abs(momentum - start).max() < 1e-12 * scale
-    assert snap["mass"].sum() == mass
-    assert np.abs(snap["vel"] - parts.vel).max() > 0.01  # the particles did interact
+    passive = (snap["ptype"] == PASSIVE) & (y > 0.05) & (y < 0.15)  # a full kernel of the active level
+    assert passive.sum() > 20
+    assert np.abs(snap["rho"][passive] - (1000.0 + 20.0 * x[passive] - 40.0 * y[passive])).max() < 1e-6
+    assert np.abs(snap["vel"][passive] - (0.1, -0.05, 0.0)).max() < 1e-6
+    moved = snap["pos"][passive] - parts.pos[passive]  # and move with it
+    assert np.abs(moved - np.array([0.1, -0.05, 0.0]) * solver.time).max() < 1e-4 * 0.1 * solver.time
+
+
+@pytest.mark.physics
+@pytest.mark.parametrize("zone", [MIDDLE, {"name": "upper", "lo": [0.0, 0.1], "hi": [0.6, 0.32], "ratio": 0.5}])
+def test_a_still_tank_with_a_zone_across_its_surface_stays_still_and_hydrostatic(zone):
+    # dx 2 cm, water 10 spacings deep, to 2 s: measured max |u| 0.68% (middle, fine side) and 0.14%
+    # (upper) of sqrt(g H), means 0.18% and 0.02%; the uniform run at dx 1 cm reaches 0.68% too
+    model = build(scene(refine=[zone]), dx=0.02)
+    solver = model.solver()
+    solver.advance(2.0)
+    snap = solver.snapshot()
+    cfg, depth = model.config, 0.2
+    fluid = snap["ptype"] == 0
+    masses = model.particles.mass.astype(np.float32).astype(np.float64)  # a float32 run's, exactly
+    assert np.array_equal(fluid, model.particles.ptype == 0) and snap["mass"][fluid].sum() == masses[fluid].sum()
+    fine = fluid & (model.particles.spacing < 0.02)
+    speed = np.linalg.norm(snap["vel"], axis=1) / np.sqrt(cfg.g_norm * depth)
+    d = depth - snap["pos"][:, 1]
+    interior = (snap["pos"][:, 0] > 0.05) & (snap["pos"][:, 0] < 0.55)
+    for side in (fine, fluid & ~fine):
+        assert speed[side].mean() < 0.005 and speed[side].max() < 0.01
+        for a, b in ((0.2, 0.4), (0.4, 0.6), (0.6, 0.8), (0.8, 0.95)):
+            s = side & interior & (d > a * depth) & (d < b * depth)
+            if s.sum() >= 5:
+                assert snap["pressure"][s].mean() / (cfg.rho0 * cfg.g_norm * d[s].mean()) == pytest.approx(1.0,
+                                                                                                          abs=0.02)
+
+
+@pytest.mark.physics
+def test_fluid_that_crosses_a_zones_edge_fails_the_run_naming_the_zone_edge():
+    column = {**TANK, "fluid": [{"name": "water", "lo": [0.0, 0.0], "hi": [0.12, 0.2]}]}
+    solver = build(parse_scene({**column, "refine": [MIDDLE]}), dx=0.02).solver()
+    with pytest.raises(HealthError, match="zone_edge.*refinement zone") as caught:
+        solver.advance(0.5)  # the front reaches x = 0.2 after about 0.06 s
+    assert 0.03 < caught.value.time < 0.3
 
 
 @pytest.mark.unit
@@ -138,17 +176,18 @@ def test_a_band_around_an_obstacle_and_nested_zones():
         build(reversed_order, dx=0.05)
     parts = build(sc, dx=0.01).particles
     assert sorted(np.unique(parts.spacing)) == [0.0025, 0.005, 0.01]
-    pier_particles = parts.body == 0
-    assert np.all(parts.spacing[pier_particles] == 0.0025)
+    pier = parts.body == 0  # each level has the pier at its own spacing, each finer one four times the particles
+    counts = [int((pier & (parts.spacing == s)).sum()) for s in (0.01, 0.005, 0.0025)]
+    assert counts[0] > 0 and counts[1] == 4 * counts[0] and counts[2] == 4 * counts[1]
 
 
 @pytest.mark.unit
 def test_zones_that_would_pass_max_particles_are_refused_before_they_are_made():
     plain = len(build(scene(), dx=0.02).particles)  # 504; the uniform bound (resources.particle_bound) 612
-    with pytest.raises(ConfigError, match=r"refine.*coarser or smaller zones: the zones make 894 particles.*"
-                                          r"max_particles is 800"):
-        build(scene(refine=[MIDDLE]), dx=0.02, max_particles=800)
-    assert len(build(scene(refine=[MIDDLE]), dx=0.02, max_particles=894).particles) == 894 > plain
+    with pytest.raises(ConfigError, match=r"refine.*coarser or smaller zones: the zones make 1.18e\+03 particles.*"
+                                          r"max_particles is 1,000"):
+        build(scene(refine=[MIDDLE]), dx=0.02, max_particles=1000)
+    assert len(build(scene(refine=[MIDDLE]), dx=0.02, max_particles=1180).particles) == 1180 > plain
 
 
 @pytest.mark.unit

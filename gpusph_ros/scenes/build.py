@@ -169,10 +169,11 @@ def build_from(scene: Scene, cfg: SolverConfig) -> Model:
         _check_refinable(scene, cfg)
         refine.check_nesting(scene.refine, scene.tank, dim, dx, cfg.hdx)
         columns, spacing = refine.split(columns, np.full(len(columns["pos"]), dx), scene.refine, scene.tank, dim, dx,
-                                        stratify=lambda rho, dz: restratify(rho, dz, cfg),
+                                        cfg.hdx, stratify=lambda rho, dz: restratify(rho, dz, cfg),
                                         limit=lambda n: resources.check_count(
                                             n, cfg, "refine", [z.name for z in scene.refine], "the zones make",
                                             "coarser or smaller zones", refined=True))
+        cfg = cfg.replace(zones=refine.zone_boxes(scene.refine, scene.tank, dim, dx))
     pos = columns["pos"] + np.asarray(scene.origin)
     if any(scene.origin):
         def move(point):
@@ -180,6 +181,7 @@ def build_from(scene: Scene, cfg: SolverConfig) -> Model:
 
         cfg = cfg.replace(domain_lo=move(cfg.domain_lo), domain_hi=move(cfg.domain_hi), wall_lo=move(cfg.wall_lo),
                           wall_hi=move(cfg.wall_hi), solids=[(move(lo), move(hi)) for lo, hi in cfg.solids],
+                          zones=[(move(lo), move(hi), spacing) for lo, hi, spacing in cfg.zones],
                           planes=[Plane(point=move(p.point), normal=p.normal) for p in cfg.planes])
         scene = reduce.translate(scene, scene.origin)
     particles = Particles(pos=pos, vel=np.zeros((len(pos), 3)), rho=columns["rho"], mass=columns["mass"],

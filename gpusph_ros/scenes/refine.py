@@ -1,10 +1,12 @@
-"""Refinement zones to particles: every particle of the scene's lattice whose centre lies in a zone
-(``refine:``, schema.Zone) is split into k^dim daughters on the sub-lattice of its own cell, k its
-spacing over the zone's, each with 1/k^dim of its mass, its density, velocity, kind and body
-(Vacondio et al. 2013, CMAME 256, the square pattern with its daughters at the cell's sub-centres).
-Mass and momentum are therefore those of the uniform lattice exactly, and the fine particles
-tile the cells they replace, so the interface is a staircase of the coarse cells with no gap and
-no overlap. Fluid, walls and obstacles are split alike: a wall in a zone is at the zone's spacing.
+"""Refinement zones to particles: each zone (``refine:``, schema.Zone) adds a level of particles at
+its spacing (sph/levels.py, adaptive particle refinement). Every particle of the parent level whose
+centre lies in the zone gets 2^dim daughters on the sub-lattice of its own cell, each with
+1/2^dim of its mass, its density, velocity, kind and body (the square pattern of Vacondio et al.
+2013, CMAME 256, its daughters at the cell's sub-centres), so the zone's active fluid is that of
+the uniform lattice at its spacing, mass exact. The parent's fluid stays as passive particles of
+its level, and the parents just outside the zone give passive daughters (and walls) in a band one
+fine kernel support wide: every active particle's kernel then holds particles of its own spacing
+only. Fluid, walls and obstacles are split alike: a wall in a zone is at the zone's spacing too.
 
 Zones are applied coarse to fine; a zone that reaches a tank face (lo or hi on the tank's
 boundary) reaches on through that wall, so its wall particles are split too.
@@ -12,6 +14,7 @@ boundary) reaches on through that wall, so its wall particles are split too.
 import numpy as np
 
 from ..sph.config import ConfigError
+from ..sph.state import FLUID, PASSIVE
 
 
 def zone_bounds(zone, tank, dim):
@@ -19,6 +22,18 @@ def zone_bounds(zone, tank, dim):
     lo = np.array([-np.inf if zone.lo[ax] <= 0.0 else zone.lo[ax] for ax in range(dim)])
     hi = np.array([np.inf if zone.hi[ax] >= tank[ax] else zone.hi[ax] for ax in range(dim)])
     return lo, hi
+
+
+def zone_boxes(zones, tank, dim: int, dx: float) -> list:
+    """SolverConfig.zones: each zone's (lo, hi, spacing), 3D, beyond +-1e30 where it is open."""
+    out = []
+    for zone in zones:
+        lo, hi = zone_bounds(zone, tank, dim)
+        lo3, hi3 = np.full(3, -1.0e30), np.full(3, 1.0e30)
+        lo3[:dim] = np.maximum(lo, -1.0e30)
+        hi3[:dim] = np.minimum(hi, 1.0e30)
+        out.append((tuple(float(v) for v in lo3), tuple(float(v) for v in hi3), zone.ratio * dx))
+    return out
 
 
 def check_nesting(zones, tank, dim: int, dx: float, hdx: float):
@@ -52,39 +67,70 @@ def sub_offsets(k: int, dim: int) -> np.ndarray:
     return out
 
 
-def split(columns: dict, spacing: np.ndarray, zones, tank, dim: int, dx: float, stratify=None, limit=None):
+def distance_outside(pos: np.ndarray, lo: np.ndarray, hi: np.ndarray, dim: int) -> np.ndarray:
+    """Each point's distance from the box [lo, hi] (0 inside it)."""
+    gap = np.maximum(lo - pos[:, :dim], 0.0) + np.maximum(pos[:, :dim] - hi, 0.0)
+    return np.linalg.norm(np.where(np.isfinite(gap), gap, 0.0), axis=1)
+
+
+def daughters(columns: dict, spacing: np.ndarray, parents: np.ndarray, target: float, dim: int, stratify=None):
+    """The daughters of ``parents`` (indices) at spacing ``target``, as columns and spacings."""
+    ks = np.rint(spacing[parents] / target).astype(int)
+    new = {name: [] for name in columns}
+    for k in np.unique(ks):
+        group = parents[ks == k]
+        offsets = sub_offsets(int(k), dim)
+        count = len(offsets)
+        shift = np.tile(offsets, (len(group), 1)) * np.repeat(spacing[group], count)[:, None]
+        for name, values in columns.items():
+            rows = np.repeat(values[group], count, axis=0)
+            if name == "pos":
+                rows = rows + shift
+            elif name == "mass":
+                rows = rows / count
+            new[name].append(rows)
+        if stratify is not None:
+            new["rho"][-1] = stratify(new["rho"][-1], shift[:, dim - 1])
+    out = {name: np.concatenate(rows) if rows else columns[name][:0] for name, rows in new.items()}
+    return out, np.full(len(out["pos"]), target)
+
+
+def split(columns: dict, spacing: np.ndarray, zones, tank, dim: int, dx: float, hdx: float, stratify=None,
+          limit=None):
     """``columns`` (name -> per-particle array: pos, rho, mass, ptype, body, ...) and ``spacing``
-    with every particle in a zone replaced by its daughters at the zone's spacing. ``stratify(rho,
-    dz)``, if given, is the density a daughter dz above its parent of density rho starts with (the
-    hydrostatic profile the lattice was built on), else the parent's. ``limit(n)``, if given, is
-    asked before each level is made whether n particles may be (it raises if not)."""
-    for zone in sorted(zones, key=lambda z: -z.ratio):  # coarse to fine: a fine zone splits its parent's daughters
+    with each zone's level added (levels.py, adaptive particle refinement):
+
+    - every active particle of the parent level in the zone gets its daughters at the zone's spacing,
+      active (fluid, walls, obstacles alike), and its fluid particles stay as the parent level's
+      passive particles (state.PASSIVE); its walls stay as they are;
+    - the parent level's active particles outside the zone get daughters too where these lie within
+      a kernel support (2 h of the zone's level, and half its spacing) of the zone: walls, and
+      passive fluid, so that every sum of the zone's active particles is over one spacing.
+
+    ``stratify(rho, dz)``, if given, is the density a daughter dz above its parent of density rho
+    starts with (the hydrostatic profile the lattice was built on), else the parent's. ``limit(n)``,
+    if given, is asked before each level is added whether n particles may be (it raises if not)."""
+    for zone in sorted(zones, key=lambda z: -z.ratio):  # coarse to fine: a fine zone's parents are daughters
         target = zone.ratio * dx
         lo, hi = zone_bounds(zone, tank, dim)
         pos = columns["pos"]
-        inside = np.all((pos[:, :dim] >= lo) & (pos[:, :dim] <= hi), axis=1) & (spacing > target * (1.0 + 1e-9))
+        parent_level = (np.abs(spacing - 2.0 * target) < 1e-9 * dx) & (columns["ptype"] != PASSIVE)
+        reach = 2.0 * hdx * target + 0.5 * target
+        near = distance_outside(pos, lo, hi, dim) <= reach + spacing  # a daughter lies within spacing / 2
+        inside = parent_level & np.all((pos[:, :dim] >= lo) & (pos[:, :dim] <= hi), axis=1)
+        band = parent_level & near & ~inside
         if not inside.any():
             continue
-        ks = np.rint(spacing[inside] / target).astype(int)
+        new, new_spacing = daughters(columns, spacing, np.flatnonzero(inside), target, dim, stratify)
+        ring, ring_spacing = daughters(columns, spacing, np.flatnonzero(band), target, dim, stratify)
+        keep = distance_outside(ring["pos"], lo, hi, dim) <= reach
+        ring = {name: values[keep] for name, values in ring.items()}
+        ring["ptype"] = np.where(ring["ptype"] == FLUID, PASSIVE, ring["ptype"]).astype(np.int32)
         if limit is not None:
-            limit(len(spacing) + int((ks ** dim - 1).sum()))
-        new = {name: [] for name in columns}
-        new_spacing = []
-        for k in np.unique(ks):
-            parents = np.flatnonzero(inside)[ks == k]
-            offsets = sub_offsets(int(k), dim)
-            daughters = len(offsets)
-            shift = np.tile(offsets, (len(parents), 1)) * np.repeat(spacing[parents], daughters)[:, None]
-            for name, values in columns.items():
-                rows = np.repeat(values[parents], daughters, axis=0)
-                if name == "pos":
-                    rows = rows + shift
-                elif name == "mass":
-                    rows = rows / daughters
-                new[name].append(rows)
-            if stratify is not None:
-                new["rho"][-1] = stratify(new["rho"][-1], shift[:, dim - 1])
-            new_spacing.append(np.full(len(parents) * daughters, target))
-        columns = {name: np.concatenate([values[~inside]] + new[name]) for name, values in columns.items()}
-        spacing = np.concatenate([spacing[~inside]] + new_spacing)
+            limit(len(spacing) + len(new_spacing) + int(keep.sum()))
+        ptype = columns["ptype"].copy()
+        ptype[inside & (ptype == FLUID)] = PASSIVE
+        columns = {name: np.concatenate([ptype if name == "ptype" else values, new[name], ring[name]])
+                   for name, values in columns.items()}
+        spacing = np.concatenate([spacing, new_spacing, ring_spacing[keep]])
     return columns, spacing

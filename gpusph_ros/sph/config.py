@@ -111,6 +111,9 @@ class Domain:
     wall_lo: tuple = setting((-1.0e30, -1.0e30, -1.0e30), "the tank's inside, low corner [m]", applies=RESET)
     wall_hi: tuple = setting((1.0e30, 1.0e30, 1.0e30), "the tank's inside, high corner [m]", applies=RESET)
     solids: list = setting(None, "solid boxes (lo, hi) fluid must stay out of", applies=RESET, factory=list)
+    # refinement zones (lo, hi, spacing), beyond +-1e30 where a zone reaches through a tank face
+    zones: list = setting(None, "refinement zones (lo, hi, spacing): where each level is the flow (sph/levels.py)",
+                          applies=RESET, factory=list)
 
 
 @dataclass

@@ -34,7 +34,7 @@ def params(cfg) -> dict:
 def build(scalar):
     vec = wp.types.vector(3, scalar)
     K = kernels.build(scalar)
-    kernel_w, smoothing = K.w, K.smoothing
+    kernel_w, smoothing, same_level = K.w, K.smoothing, K.same_level
     S = state.build(scalar)
     Params, Fields = S.Params, S.Fields
     N = neighbours.grid(scalar)
@@ -68,7 +68,8 @@ def build(scalar):
             j = nbr[base + k]
             # the lists may still hold a particle excluded this step
             t_j = f.ptype[j]
-            if t_j == FLUID or (p.wall_volume != 0 and t_j == BOUNDARY):
+            if (state.carries_fluid(t_j) or (p.wall_volume != 0 and t_j == BOUNDARY)) \
+                    and same_level(p, f.hsml[i], f.hsml[j]):
                 h, inv_h, norm, scale = smoothing(p, f.hsml[i], f.hsml[j])
                 wk = kernel_w(p.kernel, norm, inv_h, wp.length(separation(grid, f.pos[i], f.pos[j])))
                 num += f.mass[j] * wk

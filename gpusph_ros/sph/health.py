@@ -33,7 +33,10 @@ Faults of the whole state:
 - energy_growth: the fluid's kinetic + potential + elastic energy (eos.elastic_energy) more than
   ``energy_growth_ratio`` M g H above its value at the start: in a closed tank with no inflow
   every term of the scheme conserves or dissipates it, so growth is the integrator going unstable;
-- excluded_fraction: the excluded fluid would pass ``max_excluded_fraction`` of the fluid mass.
+- excluded_fraction: the excluded fluid would pass ``max_excluded_fraction`` of the fluid mass;
+- zone_edge: a fluid particle of one refinement level stands, by more than half its spacing, where
+  another level is the flow (levels.py): particles do not change level yet, so fluid that crosses
+  a zone's edge would be counted twice or not at all.
 """
 
 import functools
@@ -48,9 +51,9 @@ BOUNDARY = state.BOUNDARY
 
 # the checks, in the order they are reported; each name's index is its slot in ``fail``
 CHECKS = ("non_finite", "outside_domain", "density_bounds", "wall_penetration", "displacement", "clumping",
-          "energy_growth", "excluded_fraction")
+          "energy_growth", "excluded_fraction", "zone_edge")
 (NON_FINITE, OUTSIDE_DOMAIN, DENSITY_BOUNDS, WALL_PENETRATION, DISPLACEMENT, CLUMPING, ENERGY_GROWTH,
- EXCLUDED_FRACTION) = range(len(CHECKS))
+ EXCLUDED_FRACTION, ZONE_EDGE) = range(len(CHECKS))
 N_CHECKS = len(CHECKS)
 # the faults of one particle, which exclude a fluid particle; their index is their slot in ``fail``
 REASONS = CHECKS[:DISPLACEMENT + 1]
@@ -91,7 +94,8 @@ def params(cfg, fluid_mass: float, n_fluid: int) -> dict:
     displacement limit (0.9 x 2h, squared) and the exclusion limit."""
     return {"rho_min": cfg.rho_min_ratio * cfg.rho0, "rho_max": cfg.rho_max_ratio * cfg.rho0,
             "wall_lo": cfg.wall_lo, "wall_hi": cfg.wall_hi, "penetration": cfg.penetration_ratio * cfg.dx,
-            "n_solids": len(cfg.solids), "clump_r": cfg.clump_ratio * cfg.dx, "clump_wall": CLUMP_WALL_DX * cfg.dx,
+            "n_solids": len(cfg.solids), "n_zones": len(cfg.zones),
+            "clump_r": cfg.clump_ratio * cfg.dx, "clump_wall": CLUMP_WALL_DX * cfg.dx,
             "clump_fraction": cfg.clump_fraction, "n_fluid": max(1, n_fluid),
             "energy_slack": cfg.energy_growth_ratio * fluid_mass * cfg.g_norm * cfg.depth,
             "move_limit2": (0.9 * 2.0 * cfg.h) ** 2, "exclude": 1 if cfg.max_excluded_fraction > 0.0 else 0,
@@ -255,5 +259,29 @@ def build(scalar):
         count[CLUMPED] = 0  # ready for the next census
         count[FIRST_CLUMPED] = NO_FAILURE
 
+    @wp.kernel(enable_backward=False, module="unique")
+    def check_zone_edges(p: Params, pos_c: wp.array(dtype=vec), hsml: wp.array(dtype=scalar),
+                         ptype: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32),
+                         zone_lo: wp.array(dtype=vec), zone_hi: wp.array(dtype=vec), zone_h: wp.array(dtype=scalar),
+                         fail: wp.array(dtype=wp.int32)):
+        """Flags zone_edge with the first active fluid particle of the candidate that stands more
+        than half its spacing inside a finer zone, or, finer than the scene, more than that outside
+        every zone of its own level."""
+        i = wp.tid()
+        if p.n_zones == 0 or ptype[i] != FLUID:
+            return
+        h_i = hsml[i]
+        margin = scalar(0.5) * h_i * p.dx * p.inv_h
+        x = pos_c[i]
+        home = h_i > p.h * scalar(0.999)  # the scene's level is the flow outside the zones
+        for k in range(p.n_zones):
+            if zone_h[k] < h_i * scalar(0.999) and in_box(x, zone_lo[k], zone_hi[k], -margin, p.dim):
+                home = False
+                break
+            if wp.abs(zone_h[k] - h_i) < h_i * scalar(0.001) and in_box(x, zone_lo[k], zone_hi[k], margin, p.dim):
+                home = True
+        if not home:
+            wp.atomic_min(fail, ZONE_EDGE, ids[i])
+
     return SimpleNamespace(healthy=healthy, check_particles=check_particles, exclusion_check=exclusion_check,
-                           census=census, census_check=census_check)
+                           census=census, census_check=census_check, check_zone_edges=check_zone_edges)

@@ -12,9 +12,9 @@ f(x) = sum_j f_j W(x - x_j) V_j (thesis Eq. 2.4).
 q = r / h. The kernel is chosen at run time by an integer id so that one compiled force pass
 serves every kernel; the branch costs nothing next to the neighbour loop.
 
-Where particles differ in smoothing length (refinement zones) a pair uses the mean of its two,
-h_ab = (h_a + h_b) / 2, so that W_ab = W_ba and the pair forces stay antisymmetric (Vacondio et al.
-2013, CMAME 256, Eq. 9; Muta & Ramachandran 2022 symmetrise the same way).
+Where particles differ in smoothing length (refinement levels, levels.py) only particles of one
+level interact (``same_level``); a passive particle reads another level at the mean of the two,
+h_ab = (h_a + h_b) / 2 (the symmetrised h of Vacondio et al. 2013, CMAME 256, Eq. 9).
 """
 
 import functools
@@ -123,6 +123,13 @@ def build(scalar):
         return h, inv_h, norm, h * p.inv_h
 
     @wp.func
+    def same_level(p: Params, h_a: scalar, h_b: scalar) -> bool:
+        """Whether particles of smoothing lengths h_a and h_b are of one refinement level: only
+        such pairs interact; another level reaches a particle through its passive particles
+        (levels.py). Always true when every particle has the same h."""
+        return p.variable_h == 0 or h_a == h_b
+
+    @wp.func
     def own_scale(p: Params, h_a: scalar) -> scalar:
         """h_a / the scene's h: what a length set in dx (a cap, a threshold) is scaled by for a
         refined particle; exactly 1 when every particle has the scene's h."""
@@ -138,7 +145,7 @@ def build(scalar):
         dw_out[i] = grad_factor(kernel, norm, inv_h, r[i]) * r[i]
 
     return SimpleNamespace(shape=shape, shape_dq=shape_dq, w=w, grad_factor=grad_factor, smoothing=smoothing,
-                           own_scale=own_scale,
+                           same_level=same_level, own_scale=own_scale,
                            evaluate=evaluate)
 
 

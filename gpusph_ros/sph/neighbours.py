@@ -21,7 +21,7 @@ from types import SimpleNamespace
 import numpy as np
 import warp as wp
 
-from .state import BOUNDARY, FLUID
+from .state import BOUNDARY, carries_fluid
 
 # lists reach LIST_SKIN kernel supports; a list stays valid until some particle has moved half the
 # difference since it was built (a Verlet list)
@@ -197,7 +197,7 @@ def build(scalar):
         if needs_list[i] == 0:
             count[i] = 0
             return
-        fluid_i = ptype_sorted[ki] == FLUID
+        fluid_i = carries_fluid(ptype_sorted[ki])
         xi = pos_sorted[ki]
         off = ghost[i]
         two_centres = wp.dot(off, off) > scalar(0.0)
@@ -220,10 +220,10 @@ def build(scalar):
                     cell = neighbour_cell(grid, ci, dx, dy, dz)
                     if cell >= 0:
                         for k in range(start[cell], end[cell]):
-                            # a boundary particle needs only its fluid neighbours; an
-                            # excluded particle is nobody's neighbour
+                            # a boundary particle needs only its fluid neighbours (active or
+                            # passive); an excluded particle is nobody's neighbour
                             t_k = ptype_sorted[k]
-                            if k != ki and (t_k == FLUID or (fluid_i and t_k == BOUNDARY)):
+                            if k != ki and (carries_fluid(t_k) or (fluid_i and t_k == BOUNDARY)):
                                 r = separation(grid, xi, pos_sorted[k])
                                 radius2 = grid.radius2
                                 if grid.variable != 0:

@@ -25,6 +25,7 @@ from . import boundaries, density, eos, health, kernels, momentum, neighbours, s
 
 FLUID = state.FLUID
 BOUNDARY = state.BOUNDARY
+carries_fluid = state.carries_fluid
 EXCLUDED = state.EXCLUDED
 T, DT, DT_STABLE, T_FAILED = state.T, state.DT, state.DT_STABLE, state.T_FAILED
 STEP, FAILED_STEP = state.STEP, state.FAILED_STEP
@@ -50,7 +51,7 @@ def _force_passes(scalar):
     S = state.build(scalar)
     Params, Fields = S.Params, S.Fields
     K = kernels.build(scalar)
-    kernel_w, grad_factor, smoothing, own_scale = K.w, K.grad_factor, K.smoothing, K.own_scale
+    kernel_w, grad_factor, smoothing, own_scale, same_level = K.w, K.grad_factor, K.smoothing, K.own_scale, K.same_level
     eos_pressure = eos.build(scalar).pressure
     pressure_gradient = momentum.build(scalar).pressure_gradient
     V = viscosity.build(scalar)
@@ -70,14 +71,14 @@ def _force_passes(scalar):
     def pair(p: Params, f: Fields, a: int, b: int, r_ab: vec):
         """What particle b does to fluid particle a: (acceleration, drho/dt, XSPH velocity, |mu|,
         grad_a W_ab), the kernel gradient zero beyond the support and for walls whose particles carry
-        no fluid volume (Lennard-Jones, Monaghan-Kajtar).
+        no fluid volume (Lennard-Jones, Monaghan-Kajtar); nothing from another refinement level.
 
         Only the fields a model needs are loaded: the pair loop is where the time goes.
         """
         zero = vec(scalar(0.0))
         r = wp.length(r_ab)
         h, inv_h, norm, scale = smoothing(p, f.hsml[a], f.hsml[b])
-        if r >= scalar(2.0) * h:
+        if r >= scalar(2.0) * h or not same_level(p, f.hsml[a], f.hsml[b]):
             return zero, scalar(0.0), zero, scalar(0.0), zero
         t_b = f.ptype[b]
         if t_b == BOUNDARY and p.wall_volume == 0:  # walls without fluid volume push
@@ -89,7 +90,7 @@ def _force_passes(scalar):
         grad = r_ab * grad_factor(p.kernel, norm, inv_h, r)
         r2_eta = wp.dot(r_ab, r_ab) + p.eta2 * scale * scale
         drho = continuity(m_b, u_ab, grad)
-        if t_b == FLUID and p.delta_hc0 > scalar(0.0):
+        if carries_fluid(t_b) and p.delta_hc0 > scalar(0.0):
             drho += delta_diffusion(p.delta_hc0 * scale, rho_a, rho_b, m_b, r_ab, grad, r2_eta, p.gravity, p.rho0, p.c0)
         acc = pressure_gradient(m_b, f.p_rho2[a], f.p_rho2[b], grad)
         if p.viscosity == ARTIFICIAL:
@@ -101,10 +102,10 @@ def _force_passes(scalar):
                                    grad)
         else:
             acc += visc_laminar(p.nu, rho_a, rho_b, m_b, u_ab, r_ab, r2_eta, grad)
-            if p.viscosity == SPS and t_b == FLUID:
+            if p.viscosity == SPS and carries_fluid(t_b):
                 acc += sps_accel(m_b, rho_a, rho_b, f.tau_diag[a], f.tau_off[a], f.tau_diag[b], f.tau_off[b], grad)
         xsph = zero
-        if t_b == FLUID and p.xsph_eps > scalar(0.0):
+        if carries_fluid(t_b) and p.xsph_eps > scalar(0.0):
             xsph = xsph_velocity(p.xsph_eps, m_b, rho_a, rho_b, kernel_w(p.kernel, norm, inv_h, r), u_ab)
         mu = wp.abs(wp.dot(u_ab, r_ab)) / r2_eta
         return acc, drho, xsph, mu, grad
@@ -136,7 +137,7 @@ def _force_passes(scalar):
         base = i * grid.max_neighbours
         for k in range(count[i]):
             j = nbr[base + k]
-            if f.ptype[j] == FLUID or p.wall_volume != 0:
+            if (carries_fluid(f.ptype[j]) or p.wall_volume != 0) and same_level(p, f.hsml[i], f.hsml[j]):
                 r_ab = separation(grid, f.pos[i], f.pos[j])
                 r = wp.length(r_ab)
                 h, inv_h, norm, scale = smoothing(p, f.hsml[i], f.hsml[j])
@@ -172,7 +173,8 @@ def _force_passes(scalar):
             for k in range(count[i]):
                 j = nbr[base + k]
                 r_ij = separation(grid, xi, f.pos[j])
-                if f.ptype[j] == FLUID and wp.dot(r_ij, r_ij) < clump_r * clump_r:
+                if carries_fluid(f.ptype[j]) and same_level(p, f.hsml[i], f.hsml[j]) \
+                        and wp.dot(r_ij, r_ij) < clump_r * clump_r:
                     close = 1
                 da, ddr, dxs, mu, grad = pair(p, f, i, j, r_ij)
                 a += da
@@ -205,14 +207,16 @@ def _force_passes(scalar):
             else:
                 track_max(maxima, 2 * chunk, wp.length(a))
                 track_max(maxima, 2 * chunk + 1, mu_max)
-        elif p.wall_continuity != 0 or f.body[i] >= 0:
+        elif f.ptype[i] == BOUNDARY and (p.wall_continuity != 0 or f.body[i] >= 0):
             # a boundary particle: its density where it follows the continuity equation (dynamic
             # boundaries; mDBC sets it before the step) and, on a body, the reaction of every fluid
-            # neighbour, so that mass x acc sums to the force on it
+            # neighbour, so that mass x acc sums to the force on it. Only its level's active fluid:
+            # a passive particle follows another level, and nothing pushes it off a wall, so the
+            # wall would integrate its drift
             ui = f.vel[i]
             for k in range(count[i]):
                 j = nbr[base + k]
-                if f.ptype[j] == FLUID:
+                if f.ptype[j] == FLUID and same_level(p, f.hsml[j], f.hsml[i]):
                     r_ji = separation(grid, f.pos[j], xi)
                     r = wp.length(r_ji)
                     h, inv_h, norm, scale = smoothing(p, f.hsml[j], f.hsml[i])
@@ -225,7 +229,10 @@ def _force_passes(scalar):
         drho[i] = dr
         xsph[i] = xs
         if p.shift_a_h != scalar(0.0):
-            shift[i] = shift_velocity(p.shift_a_h * scale_i, wp.length(f.vel[i]), grad_c, div_r, p.shift_tfs, p.dim)
+            shift[i] = vec(scalar(0.0))
+            if f.ptype[i] == FLUID:
+                shift[i] = shift_velocity(p.shift_a_h * scale_i, wp.length(f.vel[i]), grad_c, div_r, p.shift_tfs,
+                                          p.dim)
         clumped[i] = close
 
     @wp.kernel(enable_backward=False, module="unique")
@@ -315,12 +322,13 @@ def _time_passes(scalar):
         rho_out = rho + f dt drho.
 
         f = 1/2 with the rates at n (predictor), f = 1 with the rates at n + 1/2 (corrector).
-        Boundary particles keep position and velocity; dynamic ones update density.
+        Boundary particles keep position and velocity; dynamic ones update density. A passive
+        particle (no rates) moves with the velocity its level's interpolation gave it (levels.py).
         """
         i = wp.tid()
         dt = factor * scalar(clock[DT])
         rho_out[i] = rho[i] + dt * drho[i]
-        if ptype[i] != FLUID:
+        if not carries_fluid(ptype[i]):
             pos_out[i] = pos[i]
             vel_out[i] = vel[i]
             return
@@ -401,4 +409,5 @@ def build(scalar):
     S, H = state.build(scalar), health.build(scalar)
     return SimpleNamespace(Params=S.Params, Fields=S.Fields, check_particles=H.check_particles,
                            exclusion_check=H.exclusion_check, census=H.census,
-                           census_check=H.census_check, **vars(_force_passes(scalar)), **vars(_time_passes(scalar)))
+                           census_check=H.census_check, check_zone_edges=H.check_zone_edges,
+                           **vars(_force_passes(scalar)), **vars(_time_passes(scalar)))

@@ -11,13 +11,13 @@ import math
 import numpy as np
 import warp as wp
 
-from . import boundaries, density, eos, health, kernels, passes, shifting, viscosity, xsph
+from . import boundaries, density, eos, health, kernels, levels, passes, shifting, viscosity, xsph
 from .config import RESET_FIELDS, SolverConfig, check_device
 from .health import HealthError
 from .launch import Launcher
 from .neighbours import NeighbourList, NeighbourOverflow, default_max_neighbours
 from .particles import Particles
-from .state import DT, DT_STABLE, EXCLUDED, FAILED_STEP, FLUID, N_CLOCK, STEP, T_FAILED, T
+from .state import DT, DT_STABLE, EXCLUDED, FAILED_STEP, FLUID, N_CLOCK, PASSIVE, STEP, T_FAILED, T
 
 _MAX_BATCH = 64  # steps launched between two reads of the clock
 # steps between two sorts of the particle arrays into cell order: neighbours then sit next to each
@@ -50,6 +50,7 @@ class Solver:
         self.boundary = boundaries.model(cfg.boundary)
         self._fluid_mass = float(particles.mass[particles.ptype == FLUID].sum())
         self.n_fluid = int((particles.ptype == FLUID).sum())
+        self.n_passive = int((particles.ptype == PASSIVE).sum())  # refinement levels' (levels.py)
         spacing = particles.spacing if particles.spacing is not None else np.full(self.n, cfg.dx)
         if np.any(spacing <= 0.0) or np.any(spacing > cfg.dx * (1.0 + 1.0e-9)):
             raise ValueError(f"particles: spacings above 0 and at most dx = {cfg.dx:g} m (a refinement zone is "
@@ -108,7 +109,7 @@ class Solver:
         self.ids = arr(np.arange(n, dtype=np.int32), wp.int32)
         # boundary particles need their own list only for their density (walls with a volume: dynamic
         # by continuity; mDBC's list holds the fluid near the ghost node too) or to sum a body force
-        needs = (particles.ptype == FLUID) | (particles.body >= 0) | self.boundary.volume
+        needs = np.isin(particles.ptype, (FLUID, PASSIVE)) | (particles.body >= 0) | self.boundary.volume
         self._needs_list = arr(needs.astype(np.int32), wp.int32)
         self.ghost = wp.zeros(n, dtype=v, device=dev)  # mDBC's ghost-node offsets (boundaries/mdbc.py); else zero
         self._sorted = [wp.empty_like(a) for a in (self.pos, self.vel, self.rho, self.mass, self.hsml, self.ptype,
@@ -133,6 +134,10 @@ class Solver:
         solids = cfg.solids or [((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))]
         self.solid_lo = arr(np.asarray([lo for lo, _ in solids], dtype=np.float64), v)
         self.solid_hi = arr(np.asarray([hi for _, hi in solids], dtype=np.float64), v)
+        zones = cfg.zones or [((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), cfg.dx)]
+        self._zone_lo = arr(np.asarray([lo for lo, _, _ in zones], dtype=np.float64), v)
+        self._zone_hi = arr(np.asarray([hi for _, hi, _ in zones], dtype=np.float64), v)
+        self._zone_h = arr(np.asarray([cfg.hdx * spacing for _, _, spacing in zones], dtype=np.float64), s)
         self._fail = arr(np.full(health.N_CHECKS, health.NO_FAILURE, dtype=np.int32), wp.int32)
         # the census sums (health.CENSUS_START); clumped fluid particles and the first of them
         self._energy_sum = arr(np.array(health.CENSUS_START), wp.float64)
@@ -160,6 +165,8 @@ class Solver:
     # -- stepping -----------------------------------------------------------------------
     def _forces(self, f):
         n, p, nl, k = self.n, self.params, self.neighbours, self._passes
+        if p.variable_h != 0:
+            self.launch(levels.build(self.scalar).passive_state, n, [p, nl.grid, nl.nbr, nl.count, f])
         wp.launch(k.equation_of_state, dim=n, inputs=[p, f], device=self.device)
         if self.config.viscosity == "sps":
             self.launch(k.sps_strain, n, [p, nl.grid, nl.nbr, nl.count, f])
@@ -196,6 +203,9 @@ class Solver:
                   inputs=[p, self.pos, self._pos_c, self._vel_c, self._rho_c, self.mass, self.hsml, self.ptype,
                           self.ids, self.solid_lo, self.solid_hi, self._fail, self._faulty, self._pending,
                           self._pending_mass], device=dev)
+        if self.config.zones:
+            wp.launch(k.check_zone_edges, dim=n, inputs=[p, self._pos_c, self.hsml, self.ptype, self.ids, self._zone_lo,
+                                                         self._zone_hi, self._zone_h, self._fail], device=dev)
         if self._launched % _CENSUS_EVERY == 0:
             self._energy_sum[health.ENERGY:health.ENERGY + 1].zero_()
             wp.launch(k.census, dim=n, inputs=[p, self._pos_c, self._vel_c, self._rho_c, self.mass, self.ptype,
@@ -253,6 +263,9 @@ class Solver:
                                   f"{e[health.ENERGY] - e[health.ENERGY_START]:.3g} J above its start "
                                   f"({self.config.energy_growth_ratio:g} M g H = {self._energy_slack:.3g} J allowed)")
             detail = ""
+            if check == "zone_edge":
+                detail = ("fluid crossed the edge of a refinement zone (refine:), which this version cannot "
+                          "follow: its particles do not change level yet, so keep zones where fluid stays")
             if check == "clumping":
                 clumped = self._energy_sum.numpy()[health.PEAK_CLUMPED]
                 detail = (f"{clumped:.1%} of the fluid particles have a neighbour closer than "
@@ -308,9 +321,11 @@ class Solver:
         return ", ".join(f"{r} {int(c)}" for r, c in zip(health.REASONS, counts) if c) or "none"
 
     def kept(self) -> np.ndarray:
-        """Which particles, in the caller's order, are still in the flow (not excluded)."""
+        """Which particles, in the caller's order, are the flow and its walls: not excluded, and
+        not a refinement level's passive particles (levels.py), which stand where another level is
+        the flow."""
         keep = np.empty(self.n, dtype=bool)
-        keep[self.ids.numpy()] = self.ptype.numpy() != EXCLUDED
+        keep[self.ids.numpy()] = ~np.isin(self.ptype.numpy(), (EXCLUDED, PASSIVE))
         return keep
 
     def reached(self, t_target: float) -> bool:

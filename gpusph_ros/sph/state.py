@@ -9,6 +9,16 @@ import warp as wp
 FLUID = 0
 BOUNDARY = 1
 EXCLUDED = 2  # a fluid particle taken out of the flow by a fault (health.py): no pass reads it
+# a fluid particle of one refinement level where another level's fluid is the flow (levels.py):
+# its own level's particles read it as fluid, its velocity and density are interpolated from the
+# level that is active there, and nothing measured or counted reads it
+PASSIVE = 3
+
+
+@wp.func
+def carries_fluid(t: wp.int32) -> bool:
+    """Whether a particle of kind t is fluid to its neighbours: active or passive fluid."""
+    return t == FLUID or t == PASSIVE
 
 # slots of the device clock (float64): the time, the step about to be taken, the step the stability
 # limits allow, and when the first failed step would have ended
@@ -74,6 +84,7 @@ def build(scalar):
         wall_hi: vec
         penetration: scalar  # penetration_ratio dx
         n_solids: int
+        n_zones: int  # refinement zones (levels.py); 0: no particle's level is checked against its place
         clump_r: scalar  # clump_ratio dx
         clump_wall: scalar  # health.CLUMP_WALL_DX dx: no clumping counted closer to a wall
         clump_fraction: wp.float64

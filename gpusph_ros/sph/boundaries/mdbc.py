@@ -8,10 +8,10 @@ instead gives each boundary particle, once a step before the first force pass (D
 MdbcCorrector off; the half step inherits it), the density the fluid has at the particle's mirror
 image across the wall face (its ghost node, x_g = 2 x_w - x_b, x_w the nearest point of the face):
 
-    A [rho_g, grad rho]^T = [sum_j m_j W_gj, sum_j m_j grad_g W_gj]^T, over fluid j, with
+    A [rho_g, grad rho]^T = [sum_j m_j W_gj, sum_j m_j grad_g W_gj]^T, over its level's fluid j, with
     A = sum_j V_j [W_gj; grad_g W_gj] (x) [1, x_j - x_g],  V_j = m_j / rho_j
 
-(a first-order kernel-corrected sum, Liu & Liu 2006), solved for rho_g where A is well
+(a first-order kernel-corrected sum, Liu & Liu 2006: interpolate.py), solved for rho_g where A is well
 conditioned: its determinant at least 1e-3 and its condition number, scaled by dx^2, at most 50;
 elsewhere the Shepard density sum m W / sum V W; where the ghost's kernel sum sum V W is a thin
 film's (below 0.1) the Shepard sum no lower than rho0; rho0 with no fluid near. The ghost's
@@ -40,7 +40,7 @@ from types import SimpleNamespace
 
 import warp as wp
 
-from .. import eos, kernels, neighbours, state
+from .. import eos, interpolate, kernels, neighbours, state
 from .model import BoundaryModel
 
 FLUID = state.FLUID
@@ -48,11 +48,8 @@ BOUNDARY = state.BOUNDARY
 SLIPS = ("none", "no_slip", "free_slip")  # the run setting mdbc_slip
 SLIP_ID = {name: k for k, name in enumerate(SLIPS)}
 NO_SLIP, FREE_SLIP = SLIP_ID["no_slip"], SLIP_ID["free_slip"]
-DETERMINANT_LIMIT = 1.0e-3  # DualSPHysics' determlimit for the first-order correction
-# DualSPHysics 5.4's mDBC (JSphCpu::InteractionMdbc2CorrectionT2): the first-order correction only
-# where A's condition number, scaled by dx^2, is at most this; and below this kernel sum at the ghost
+# DualSPHysics 5.4's mDBC (JSphCpu::InteractionMdbc2CorrectionT2): below this kernel sum at the ghost
 # (a thin film) the Shepard density, floored at rho0
-CONDITION_LIMIT = 50.0
 FILM_SUM = 0.1
 
 
@@ -86,11 +83,11 @@ def build(scalar):
     vec = wp.types.vector(3, scalar)
     vec4 = wp.types.vector(4, scalar)
     mat44 = wp.types.matrix((4, 4), scalar)
-    K = kernels.build(scalar)
-    kernel_w, grad_factor, smoothing, own_scale = K.w, K.grad_factor, K.smoothing, K.own_scale
+    same_level = kernels.build(scalar).same_level
+    interp = interpolate.build(scalar)
+    ghost_term, corrected_density = interp.corrected_term, interp.corrected_density
     N = neighbours.grid(scalar)
-    Grid, separation, cell_coord, cells_around, cell_around = (N.Grid, N.separation, N.cell_coord, N.cells_around,
-                                                                N.cell_around)
+    Grid, cell_coord, cells_around, cell_around = N.Grid, N.cell_coord, N.cells_around, N.cell_around
     S = state.build(scalar)
     Params, Fields = S.Params, S.Fields
     eos_pressure = eos.build(scalar).pressure
@@ -121,50 +118,15 @@ def build(scalar):
         return off
 
     @wp.func
-    def ghost_term(p: Params, grid: Grid, f: Fields, xg: vec, h_g: scalar, j: int, a: mat44, rhs: vec4, u: vec):
-        """Fluid particle j's part of the correction matrix A, of the right-hand side
-        [sum m W, sum m grad W] and of sum V W u at the ghost node xg of smoothing length h_g
-        (nothing beyond the support)."""
-        r_gj = separation(grid, xg, f.pos[j])
-        r = wp.length(r_gj)
-        h, inv_h, norm, scale = smoothing(p, h_g, f.hsml[j])
-        if r < scalar(2.0) * h:
-            w = kernel_w(p.kernel, norm, inv_h, r)
-            gw = r_gj * grad_factor(p.kernel, norm, inv_h, r)
-            m = f.mass[j]
-            v = m / f.rho[j]
-            row = vec4(w, gw[0], gw[1], gw[2])
-            a += v * wp.outer(row, vec4(scalar(1.0), -r_gj[0], -r_gj[1], -r_gj[2]))
-            rhs += m * row
-            u += v * w * f.vel[j]
-        return a, rhs, u
-
-    @wp.func
-    def inf_norm(m: mat44) -> scalar:
-        """The largest row sum of |m|."""
-        out = scalar(0.0)
-        for r in range(4):
-            out = wp.max(out, wp.abs(m[r, 0]) + wp.abs(m[r, 1]) + wp.abs(m[r, 2]) + wp.abs(m[r, 3]))
-        return out
-
-    @wp.func
     def ghost_density(p: Params, a: mat44, rhs: vec4, h_g: scalar) -> scalar:
-        """The fluid's density at the ghost node from its sums: first order where A is well
-        conditioned (its determinant at least DETERMINANT_LIMIT and its condition number, scaled by
-        dx^2, at most CONDITION_LIMIT), else the Shepard sum; where the ghost's kernel sum is a thin
-        film's (below FILM_SUM) the Shepard sum no lower than rho0; rho0 where no fluid is near."""
+        """The fluid's density at the ghost node from its sums (interpolate.py); where the ghost's
+        kernel sum is a thin film's (below FILM_SUM) the Shepard sum no lower than rho0; rho0 where
+        no fluid is near."""
         if a[0, 0] <= scalar(0.0):
             return p.rho0
         if a[0, 0] < scalar(FILM_SUM):
             return wp.max(p.rho0, rhs[0] / a[0, 0])
-        if p.dim == 2:
-            a[3, 3] = scalar(1.0)  # the unused axis
-        if wp.abs(wp.determinant(a)) >= scalar(DETERMINANT_LIMIT):
-            inv = wp.inverse(a)
-            dx = p.dx * own_scale(p, h_g)
-            if dx * dx * inf_norm(a) * inf_norm(inv) <= scalar(CONDITION_LIMIT):
-                return (inv * rhs)[0]
-        return rhs[0] / a[0, 0]
+        return corrected_density(p, a, rhs, h_g)
 
     @wp.func
     def cloned_pressure(p: Params, rho_g: scalar, d: vec) -> scalar:
@@ -206,7 +168,9 @@ def build(scalar):
         base = i * grid.max_neighbours
         h_g = f.hsml[i]
         for k in range(count[i]):
-            a, rhs, u = ghost_term(p, grid, f, xg, h_g, nbr[base + k], a, rhs, u)
+            j = nbr[base + k]
+            if same_level(p, h_g, f.hsml[j]):
+                a, rhs, u = ghost_term(p, grid, f, xg, h_g, j, a, rhs, u)
         f.rho[i] = tait_density(p, cloned_pressure(p, ghost_density(p, a, rhs, h_g), -off))
         u_b = vec(scalar(0.0))
         if a[0, 0] > scalar(0.0):
