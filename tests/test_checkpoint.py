@@ -1,15 +1,19 @@
 """A solver's state taken and put back (sph/checkpoint.py): a solver restored from a state taken at
 0.1 s and stepped to 0.2 s ends bit for bit where the solver it was taken from ends, for each kind of
 wall, viscosity and precision, in 2D and 3D; the neighbour lists, rebuilt rather than stored, come
-back pair for pair."""
+back pair for pair; with a refinement zone too, across the steps where particles change level."""
 import numpy as np
 import pytest
 
 from gpusph_ros.scenes.build import build
-from gpusph_ros.scenes.schema import load_scene
+from gpusph_ros.scenes.schema import load_scene, parse_scene
 from gpusph_ros.sph import checkpoint
 
 pytestmark = pytest.mark.physics
+# a column collapsing into a refinement zone: between 0.1 and 0.2 s its surge reaches the zone, where
+# particles change level and new ones are made in reserved slots (sph/levels.py)
+ZONED = {"name": "zoned", "dim": 2, "tank": [0.6, 0.32], "fluid": [{"name": "water", "lo": [0, 0], "hi": [0.12, 0.2]}],
+         "refine": [{"name": "downstream", "lo": [0.2, 0.0], "hi": [0.6, 0.32], "ratio": 0.5}]}
 
 
 @pytest.mark.parametrize("scene, dx, settings", [
@@ -17,9 +21,10 @@ pytestmark = pytest.mark.physics
     ("collapse_2d", 0.01, {"viscosity": "sps", "precision": "float64"}),
     ("dambreak1_thesis", 0.06, {"boundary": "mdbc"}),
     ("dambreak1_thesis", 0.06, {"boundary": "monaghan_kajtar", "shifting": True}),
+    (ZONED, 0.02, {}),
 ])
 def test_a_restored_solver_steps_as_the_one_it_was_taken_from(scene, dx, settings):
-    model = build(load_scene(scene), dx=dx, **settings)
+    model = build(load_scene(scene) if isinstance(scene, str) else parse_scene(scene), dx=dx, **settings)
     first = model.solver()
     first.advance(0.1)
     state = checkpoint.capture(first)

@@ -10,18 +10,20 @@ particles (sph/levels.py, adaptive particle refinement).
 - A passive particle takes the active level's fields by a first-order interpolation: a linear
   density exactly, a uniform velocity exactly.
 - A still tank with a zone across its surface stays still and hydrostatic on both sides.
-- Fluid that crosses a zone's edge fails the run (zone_edge): particles do not change level yet.
+- Particles change level where they stand: a column collapsing into a zone keeps its active mass
+  within one coarse particle's, each kind where it belongs, and the front in the zone nearer the
+  uniform fine run's than the uniform coarse run's.
 - A zone that cannot be built is refused naming the field.
 """
 import numpy as np
 import pytest
 
+from gpusph_ros.scenes import resources
 from gpusph_ros.scenes.build import build
 from gpusph_ros.scenes.schema import parse_scene
 from gpusph_ros.sph.config import ConfigError
 from gpusph_ros.sph.eos import hydrostatic_density
-from gpusph_ros.sph.health import HealthError
-from gpusph_ros.sph.state import PASSIVE
+from gpusph_ros.sph.state import PASSIVE, VACANT
 
 TANK = {"name": "tank", "dim": 2, "tank": [0.6, 0.32],
         "fluid": [{"name": "water", "lo": [0.0, 0.0], "hi": [0.6, 0.2]}]}
@@ -59,12 +61,15 @@ def test_a_zone_adds_a_fine_level_over_passive_coarse_fluid_and_a_passive_fine_b
     reach = 2.0 * cfg.hdx * dx / 2 + dx / 4
     gap = np.maximum(0.2 - uniform_fluid[:, 0], uniform_fluid[:, 0] - 0.4)
     assert same_points(parts.pos[fine & (parts.ptype == PASSIVE)], uniform_fluid[(gap > 0) & (gap <= reach)])
+    # slots for the fine particles fluid arriving will need: the zone and band's cells x 1.3, less those there
+    cells = (0.2 + 2 * reach) / (dx / 2) * 0.32 / (dx / 2)
+    assert (parts.ptype == VACANT).sum() == np.ceil(1.3 * cells) - (fine & np.isin(parts.ptype, (0, PASSIVE))).sum()
     # fine walls: the daughters of the walls in the zone and in the band
     fine_walls = parts.pos[fine & (parts.ptype == 1)]
     assert len(fine_walls) >= 4 * ((plain.ptype == 1) & inside).sum() > 0
     assert np.all(np.maximum(0.2 - fine_walls[:, 0], fine_walls[:, 0] - 0.4) <= reach)
     # each fine particle on the hydrostatic profile at its own depth below the surface
-    f = fine & (parts.ptype != 1)
+    f = fine & np.isin(parts.ptype, (0, PASSIVE))
     expected = hydrostatic_density(0.2 - parts.pos[f, 1], cfg.rho0, cfg.eos_b, cfg.gamma, cfg.g_norm)
     assert np.allclose(parts.rho[f], expected, rtol=1e-12)
 
@@ -135,13 +140,45 @@ def test_a_still_tank_with_a_zone_across_its_surface_stays_still_and_hydrostatic
                                                                                                           abs=0.02)
 
 
+COLUMN = {**TANK, "fluid": [{"name": "water", "lo": [0.0, 0.0], "hi": [0.12, 0.2]}]}
+DOWNSTREAM = {"name": "downstream", "lo": [0.2, 0.0], "hi": [0.6, 0.32], "ratio": 0.5}
+
+
 @pytest.mark.physics
-def test_fluid_that_crosses_a_zones_edge_fails_the_run_naming_the_zone_edge():
-    column = {**TANK, "fluid": [{"name": "water", "lo": [0.0, 0.0], "hi": [0.12, 0.2]}]}
-    solver = build(parse_scene({**column, "refine": [MIDDLE]}), dx=0.02).solver()
-    with pytest.raises(HealthError, match="zone_edge.*refinement zone") as caught:
-        solver.advance(0.5)  # the front reaches x = 0.2 after about 0.06 s
-    assert 0.03 < caught.value.time < 0.3
+def test_a_column_collapsing_into_a_zone_changes_level_there():
+    # the surge from a coarse column (dx 2 cm) runs into a 0.5 zone from x = 0.2 m; measured fronts
+    # minus the uniform 1 cm run's at 0.25 / 0.3 / 0.35 s: -0.39 / -0.52 / -0.10 a (zoned), -0.56 /
+    # -0.83 / -0.60 a (uniform 2 cm); the active mass within 0.9% of the column's
+    a, times = 0.12, (0.25, 0.3, 0.35)
+    fronts = {}
+    for name, sc, dx in (("fine", parse_scene(COLUMN), 0.01), ("coarse", parse_scene(COLUMN), 0.02),
+                         ("zoned", parse_scene({**COLUMN, "refine": [DOWNSTREAM]}), 0.02)):
+        model = build(sc, dx=dx)
+        solver = model.solver()
+        mass = model.particles.mass[model.particles.ptype == 0].sum()
+        fronts[name] = []
+        for t in times:
+            solver.advance(t)
+            snap = solver.snapshot()
+            active = snap["ptype"] == 0
+            fronts[name].append(snap["pos"][active, 0].max())
+            if name == "zoned":  # within one coarse particle's mass of the column's (1/60 of it)
+                assert abs(snap["mass"][active].sum() / mass - 1.0) < 1.0 / 60.0
+                h = np.empty(solver.n)
+                h[solver.ids.numpy()] = solver.hsml.numpy()
+                fine = h < model.config.h * 0.999
+                x = snap["pos"][:, 0]
+                # each kind where it stands: active fine in the zone, active coarse outside it,
+                # passive coarse in it, passive fine within its band (2 h + dx / 4) and two spacings
+                assert np.all(x[active & fine] >= 0.2) and np.all(x[active & ~fine] < 0.2)
+                passive = snap["ptype"] == PASSIVE
+                assert np.all(x[passive & ~fine] >= 0.2)
+                assert np.all(x[passive & fine] >= 0.2 - 2 * model.config.h / 2 - 0.005 - 0.02) and \
+                    np.all(x[passive & fine] < 0.2)
+        assert np.isfinite(fronts[name]).all()
+    fine, coarse, zoned = (np.array(fronts[k]) for k in ("fine", "coarse", "zoned"))
+    assert np.all(np.abs(zoned - fine) < np.abs(coarse - fine)) and np.all(zoned > 0.2)
+    assert np.abs(zoned - fine).max() < 0.6 * a
 
 
 @pytest.mark.unit
@@ -184,10 +221,16 @@ def test_a_band_around_an_obstacle_and_nested_zones():
 @pytest.mark.unit
 def test_zones_that_would_pass_max_particles_are_refused_before_they_are_made():
     plain = len(build(scene(), dx=0.02).particles)  # 504; the uniform bound (resources.particle_bound) 612
-    with pytest.raises(ConfigError, match=r"refine.*coarser or smaller zones: the zones make 1.18e\+03 particles.*"
-                                          r"max_particles is 1,000"):
-        build(scene(refine=[MIDDLE]), dx=0.02, max_particles=1000)
-    assert len(build(scene(refine=[MIDDLE]), dx=0.02, max_particles=1180).particles) == 1180 > plain
+    # the fine level (1,180 particles with it), then the slots reserved for the fluid it may receive
+    for limit, made in ((1000, "1.18e\\+03"), (1700, "1.75e\\+03")):
+        with pytest.raises(ConfigError, match=rf"refine.*coarser or smaller zones: the zones make {made} particles.*"
+                                              rf"max_particles is {limit:,}"):
+            build(scene(refine=[MIDDLE]), dx=0.02, max_particles=limit)
+    model = build(scene(refine=[MIDDLE]), dx=0.02, max_particles=1750)
+    assert len(model.particles) == 1750 > plain
+    # the estimate that refusal reads is the solver's own within 2%: wider lists, the levels' books
+    estimate = resources.device_bytes(len(model.particles), model.config, refined=True)
+    assert estimate == pytest.approx(model.solver().device_bytes(), rel=0.02)
 
 
 @pytest.mark.unit

@@ -86,8 +86,8 @@ class CloudPacker:
 
     def pack(self) -> np.ndarray:
         """The rows, (n, 3 + fields) float32: a view of the reusable host buffer, valid until
-        the next call. Excluded particles (sph.health) and passive ones (sph.levels) are left out,
-        the others keep their order."""
+        the next call. Excluded particles (sph.health) and a refinement level's passive particles
+        and vacant slots (sph.levels) are left out, the others keep their order."""
         s = self.solver
         s.update_pressure()
         # on every core of a CPU (the solver's launcher): a memory-bound scatter of 32 B a particle
@@ -97,4 +97,4 @@ class CloudPacker:
             wp.copy(self._host, self._rows)  # into pinned memory: asynchronous until the sync below
         wp.synchronize_device(s.device)
         rows = self._host.numpy()
-        return rows[s.kept()] if s.excluded_particles or s.n_passive else rows
+        return rows[s.kept()] if s.excluded_particles or s.leveled else rows

@@ -168,11 +168,13 @@ def build_from(scene: Scene, cfg: SolverConfig) -> Model:
     if scene.refine:
         _check_refinable(scene, cfg)
         refine.check_nesting(scene.refine, scene.tank, dim, dx, cfg.hdx)
+        def limit(n):
+            resources.check_count(n, cfg, "refine", [z.name for z in scene.refine], "the zones make",
+                                  "coarser or smaller zones", refined=True)
+
         columns, spacing = refine.split(columns, np.full(len(columns["pos"]), dx), scene.refine, scene.tank, dim, dx,
-                                        cfg.hdx, stratify=lambda rho, dz: restratify(rho, dz, cfg),
-                                        limit=lambda n: resources.check_count(
-                                            n, cfg, "refine", [z.name for z in scene.refine], "the zones make",
-                                            "coarser or smaller zones", refined=True))
+                                        cfg.hdx, stratify=lambda rho, dz: restratify(rho, dz, cfg), limit=limit)
+        columns, spacing = refine.reserve(columns, spacing, scene.refine, scene.tank, dim, dx, cfg.hdx, limit=limit)
         cfg = cfg.replace(zones=refine.zone_boxes(scene.refine, scene.tank, dim, dx))
     pos = columns["pos"] + np.asarray(scene.origin)
     if any(scene.origin):

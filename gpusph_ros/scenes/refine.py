@@ -14,7 +14,8 @@ boundary) reaches on through that wall, so its wall particles are split too.
 import numpy as np
 
 from ..sph.config import ConfigError
-from ..sph.state import FLUID, PASSIVE
+from ..sph.levels import sub_offsets
+from ..sph.state import FLUID, PASSIVE, VACANT
 
 
 def zone_bounds(zone, tank, dim):
@@ -55,16 +56,6 @@ def check_nesting(zones, tank, dim: int, dx: float, hdx: float):
             raise ConfigError(f"refine[{k}]", z.name, f"a zone at least {support:.4g} m (the kernel support of ratio "
                                                       f"{2 * z.ratio:g}) inside a zone of ratio {2 * z.ratio:g}, or "
                                                       "reaching the same tank faces")
-
-
-def sub_offsets(k: int, dim: int) -> np.ndarray:
-    """The k^dim daughters' offsets from their parent's centre in units of its spacing."""
-    c = (np.arange(k) + 0.5) / k - 0.5
-    grids = np.meshgrid(*([c] * dim), indexing="ij")
-    out = np.zeros((grids[0].size, 3))
-    for ax in range(dim):
-        out[:, ax] = grids[ax].ravel()
-    return out
 
 
 def distance_outside(pos: np.ndarray, lo: np.ndarray, hi: np.ndarray, dim: int) -> np.ndarray:
@@ -134,3 +125,51 @@ def split(columns: dict, spacing: np.ndarray, zones, tank, dim: int, dx: float, 
                    for name, values in columns.items()}
         spacing = np.concatenate([spacing, new_spacing, ring_spacing[keep]])
     return columns, spacing
+
+
+# vacant slots a level holds over the fine lattice of its zone and band: water at the density bound
+# (1.25 rho0) packs 1.25 particles a cell
+RESERVE_SLACK = 1.3
+
+
+def reserve(columns: dict, spacing: np.ndarray, zones, tank, dim: int, dx: float, hdx: float, limit=None):
+    """``columns`` and ``spacing`` with the vacant slots (state.VACANT) each zone's level may need
+    for the fluid that reaches it (sph/levels.py makes its particles there as it arrives): the fine
+    lattice over the zone and its band, within the tank, x RESERVE_SLACK, less that level's fluid
+    there now. ``limit(n)`` as for ``split``."""
+    rows = []
+    for zone in zones:
+        target = zone.ratio * dx
+        lo, hi = zone_bounds(zone, tank, dim)
+        reach = 2.0 * hdx * target + 0.5 * target
+        lo_c = np.maximum(lo - reach, 0.0)
+        hi_c = np.minimum(hi + reach, np.asarray(tank[:dim], dtype=float))
+        cells = float(np.prod((hi_c - lo_c) / target))
+        level = (np.abs(spacing - target) < 1e-9 * dx) & np.isin(columns["ptype"], (FLUID, PASSIVE)) \
+            & (distance_outside(columns["pos"], lo, hi, dim) <= reach)
+        count = max(0, int(np.ceil(RESERVE_SLACK * cells)) - int(level.sum()))
+        centre = np.zeros(3)
+        centre[:dim] = 0.5 * (lo_c + hi_c)
+        rows.append((count, centre, target))
+    total = sum(count for count, _, _ in rows)
+    if limit is not None:
+        limit(len(spacing) + total)
+    rho = float(np.mean(columns["rho"]))
+    new = {name: [values] for name, values in columns.items()}
+    new_spacing = [spacing]
+    for count, centre, target in rows:
+        for name, values in columns.items():
+            if name == "pos":
+                block = np.tile(centre, (count, 1))
+            elif name == "rho":
+                block = np.full(count, rho)
+            elif name == "ptype":
+                block = np.full(count, VACANT, dtype=values.dtype)
+            elif name == "body":
+                block = np.full(count, -1, dtype=values.dtype)
+            else:
+                block = np.zeros((count,) + values.shape[1:], dtype=values.dtype)
+            new[name].append(block)
+        new_spacing.append(np.full(count, target))
+    return {name: np.concatenate(blocks) for name, blocks in new.items()}, np.concatenate(new_spacing)
+

@@ -19,7 +19,8 @@ from ..sph.neighbours import default_max_neighbours
 from .boxes import cells
 
 HOST_BYTES = 200  # numpy arrays of the particle set and the lattice fills, per particle
-_SCALARS, _INTEGER_BYTES = 63, 68
+_SCALARS, _INTEGER_BYTES = 63, 76
+_LEVEL_BYTES = 20  # with zones: the levels' spawn and free-slot bookkeeping (sph/levels.py)
 USABLE = 0.9  # of the free memory a run may plan to take
 
 
@@ -47,10 +48,11 @@ def particle_bound(scene, cfg: SolverConfig, fluid_boxes) -> int:
 
 def device_bytes(n: int, cfg: SolverConfig, refined: bool = False) -> int:
     """The device memory a solver of ``n`` particles takes (an estimate within a few percent);
-    ``refined``: with refinement zones, whose lists are wider."""
+    ``refined``: with refinement zones, whose lists are wider and whose levels keep books."""
     scalar = 8 if cfg.precision == "float64" else 4
     finest = 0.5 if refined else 1.0
-    return n * (4 * default_max_neighbours(cfg.dim, cfg.hdx, finest) + _SCALARS * scalar + _INTEGER_BYTES)
+    integers = _INTEGER_BYTES + (_LEVEL_BYTES if refined else 0)
+    return n * (4 * default_max_neighbours(cfg.dim, cfg.hdx, finest) + _SCALARS * scalar + integers)
 
 
 def host_free_bytes() -> int:

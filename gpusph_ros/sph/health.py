@@ -34,9 +34,8 @@ Faults of the whole state:
   ``energy_growth_ratio`` M g H above its value at the start: in a closed tank with no inflow
   every term of the scheme conserves or dissipates it, so growth is the integrator going unstable;
 - excluded_fraction: the excluded fluid would pass ``max_excluded_fraction`` of the fluid mass;
-- zone_edge: a fluid particle of one refinement level stands, by more than half its spacing, where
-  another level is the flow (levels.py): particles do not change level yet, so fluid that crosses
-  a zone's edge would be counted twice or not at all.
+- zone_reserve: a refinement level needed more particles than the build reserved for it
+  (levels.py: fluid arriving at a zone gets fine particles in slots reserved for them).
 """
 
 import functools
@@ -51,9 +50,9 @@ BOUNDARY = state.BOUNDARY
 
 # the checks, in the order they are reported; each name's index is its slot in ``fail``
 CHECKS = ("non_finite", "outside_domain", "density_bounds", "wall_penetration", "displacement", "clumping",
-          "energy_growth", "excluded_fraction", "zone_edge")
+          "energy_growth", "excluded_fraction", "zone_reserve")
 (NON_FINITE, OUTSIDE_DOMAIN, DENSITY_BOUNDS, WALL_PENETRATION, DISPLACEMENT, CLUMPING, ENERGY_GROWTH,
- EXCLUDED_FRACTION, ZONE_EDGE) = range(len(CHECKS))
+ EXCLUDED_FRACTION, ZONE_RESERVE) = range(len(CHECKS))
 N_CHECKS = len(CHECKS)
 # the faults of one particle, which exclude a fluid particle; their index is their slot in ``fail``
 REASONS = CHECKS[:DISPLACEMENT + 1]
@@ -259,29 +258,5 @@ def build(scalar):
         count[CLUMPED] = 0  # ready for the next census
         count[FIRST_CLUMPED] = NO_FAILURE
 
-    @wp.kernel(enable_backward=False, module="unique")
-    def check_zone_edges(p: Params, pos_c: wp.array(dtype=vec), hsml: wp.array(dtype=scalar),
-                         ptype: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32),
-                         zone_lo: wp.array(dtype=vec), zone_hi: wp.array(dtype=vec), zone_h: wp.array(dtype=scalar),
-                         fail: wp.array(dtype=wp.int32)):
-        """Flags zone_edge with the first active fluid particle of the candidate that stands more
-        than half its spacing inside a finer zone, or, finer than the scene, more than that outside
-        every zone of its own level."""
-        i = wp.tid()
-        if p.n_zones == 0 or ptype[i] != FLUID:
-            return
-        h_i = hsml[i]
-        margin = scalar(0.5) * h_i * p.dx * p.inv_h
-        x = pos_c[i]
-        home = h_i > p.h * scalar(0.999)  # the scene's level is the flow outside the zones
-        for k in range(p.n_zones):
-            if zone_h[k] < h_i * scalar(0.999) and in_box(x, zone_lo[k], zone_hi[k], -margin, p.dim):
-                home = False
-                break
-            if wp.abs(zone_h[k] - h_i) < h_i * scalar(0.001) and in_box(x, zone_lo[k], zone_hi[k], margin, p.dim):
-                home = True
-        if not home:
-            wp.atomic_min(fail, ZONE_EDGE, ids[i])
-
     return SimpleNamespace(healthy=healthy, check_particles=check_particles, exclusion_check=exclusion_check,
-                           census=census, census_check=census_check, check_zone_edges=check_zone_edges)
+                           census=census, census_check=census_check)

@@ -38,6 +38,11 @@ def build(scalar):
     Params, Fields = S.Params, S.Fields
 
     @wp.func
+    def no_sums():
+        """The sums (A, the right-hand side, sum V W u) before any particle is added."""
+        return mat44(scalar(0.0)), vec4(scalar(0.0)), vec(scalar(0.0))
+
+    @wp.func
     def corrected_term(p: Params, grid: Grid, f: Fields, x: vec, h_x: scalar, j: int, a: mat44, rhs: vec4, u: vec):
         """Fluid particle j's part of the correction matrix A, of the right-hand side
         [sum m W, sum m grad W] and of sum V W u at the point x of smoothing length h_x (nothing
@@ -78,4 +83,5 @@ def build(scalar):
                 return (inv * rhs)[0]
         return rhs[0] / a[0, 0]
 
-    return SimpleNamespace(corrected_term=corrected_term, corrected_density=corrected_density)
+    return SimpleNamespace(vec4=vec4, mat44=mat44, no_sums=no_sums, corrected_term=corrected_term,
+                           corrected_density=corrected_density)

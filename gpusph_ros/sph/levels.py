@@ -13,30 +13,52 @@ the first-order corrected interpolation of interpolate.py over that level's acti
 (Chiron et al. 2018, Section 3: the passive particles' fields interpolated from the other level),
 and it moves with that velocity.
 
+Particles change level where they stand, after every committed step (``relevel``): a particle
+inside a finer zone is passive; a zone's own particle is active in its zone, passive within its
+band (one kernel support, 2 h + half a spacing, outside the zone) and removed beyond it (VACANT);
+the scene's level is active everywhere else. An active particle that comes within half its spacing
+of a finer level's band gets 2^dim passive daughters on its cell's sub-lattice (``spawn``), once
+until it leaves the band's neighbourhood, into slots the build reserved (scenes/refine.py). Fluid
+entering a zone so brings its fine particles with it, and fluid leaving one finds the coarse
+particles that followed it there. Slots are numbered by prefix sums, not atomics, so a run is
+reproducible bit for bit on the CPU.
+
 What this gives up: across an interface momentum passes by interpolation, not by pair forces, so it
-is conserved to the interpolation's accuracy, not to round-off; mass is each level's active
-particles', exact while no particle changes level.
+is conserved to the interpolation's accuracy, not to round-off; the active mass changes by what
+the levels exchange, as the particles that cross an edge are not each other's exact mass.
 """
 
 import functools
 from types import SimpleNamespace
 
+import numpy as np
 import warp as wp
 
 from . import interpolate, kernels, neighbours, state
 
 FLUID = state.FLUID
 PASSIVE = state.PASSIVE
+VACANT = state.VACANT
+carries_fluid = state.carries_fluid
+FAR = 1.0e30
+
+
+def sub_offsets(k: int, dim: int) -> np.ndarray:
+    """The k^dim daughters' offsets from their parent's centre in units of its spacing."""
+    c = (np.arange(k) + 0.5) / k - 0.5
+    grids = np.meshgrid(*([c] * dim), indexing="ij")
+    out = np.zeros((grids[0].size, 3))
+    for ax in range(dim):
+        out[:, ax] = grids[ax].ravel()
+    return out
 
 
 @functools.lru_cache(maxsize=None)
 def build(scalar):
     vec = wp.types.vector(3, scalar)
-    vec4 = wp.types.vector(4, scalar)
-    mat44 = wp.types.matrix((4, 4), scalar)
-    same_level = kernels.build(scalar).same_level
     interp = interpolate.build(scalar)
-    corrected_term, corrected_density = interp.corrected_term, interp.corrected_density
+    no_sums, corrected_term, corrected_density = interp.no_sums, interp.corrected_term, interp.corrected_density
+    same_level = kernels.build(scalar).same_level
     Grid = neighbours.grid(scalar).Grid
     S = state.build(scalar)
     Params, Fields = S.Params, S.Fields
@@ -52,9 +74,7 @@ def build(scalar):
             return
         h_i = f.hsml[i]
         x = f.pos[i]
-        a = mat44(scalar(0.0))
-        rhs = vec4(scalar(0.0))
-        u = vec(scalar(0.0))
+        a, rhs, u = no_sums()
         base = i * grid.max_neighbours
         for k in range(count[i]):
             j = nbr[base + k]
@@ -64,4 +84,134 @@ def build(scalar):
             f.rho[i] = wp.clamp(corrected_density(p, a, rhs, h_i), p.rho_min, p.rho_max)
             f.vel[i] = u / a[0, 0]
 
-    return SimpleNamespace(passive_state=passive_state)
+    @wp.func
+    def box_distance(p: Params, x: vec, lo: vec, hi: vec) -> scalar:
+        """The distance from x to the box [lo, hi] over the run's axes (0 inside it)."""
+        d2 = scalar(0.0)
+        for ax in range(p.dim):
+            gap = wp.max(lo[ax] - x[ax], scalar(0.0)) + wp.max(x[ax] - hi[ax], scalar(0.0))
+            d2 += gap * gap
+        return wp.sqrt(d2)
+
+    @wp.func
+    def band(p: Params, h: scalar) -> scalar:
+        """How far outside its zone a level of smoothing length h keeps passive particles: its
+        kernel support and half its spacing (scenes/refine.py builds the same band)."""
+        return scalar(2.0) * h + scalar(0.5) * h * p.dx * p.inv_h
+
+    @wp.func
+    def place(p: Params, x: vec, h_i: scalar, zone_lo: wp.array(dtype=vec), zone_hi: wp.array(dtype=vec),
+              zone_h: wp.array(dtype=scalar)):
+        """Where a particle of smoothing length h_i at x stands among the zones: (1 inside a finer zone,
+        its distance from its own level's nearest zone, its distance beyond the band of the next
+        finer level's nearest zone)."""
+        finer = int(0)
+        own = scalar(FAR)
+        child = scalar(FAR)
+        for k in range(p.n_zones):
+            h_k = zone_h[k]
+            d = box_distance(p, x, zone_lo[k], zone_hi[k])
+            if h_k < h_i * scalar(0.999):
+                if d <= scalar(0.0):
+                    finer = 1
+                if wp.abs(scalar(2.0) * h_k - h_i) < scalar(0.001) * h_i:
+                    child = wp.min(child, d - band(p, h_k))
+            elif wp.abs(h_k - h_i) < scalar(0.001) * h_i:
+                own = wp.min(own, d)
+        return finer, own, child
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def mark_spawned(p: Params, pos: wp.array(dtype=vec), hsml: wp.array(dtype=scalar),
+                     ptype: wp.array(dtype=wp.int32), zone_lo: wp.array(dtype=vec), zone_hi: wp.array(dtype=vec),
+                     zone_h: wp.array(dtype=scalar), spawned: wp.array(dtype=wp.int32)):
+        """At the start: the fluid near a finer level's band has its daughters already (the build's)."""
+        i = wp.tid()
+        spawned[i] = 0
+        if carries_fluid(ptype[i]):
+            finer, own, child = place(p, pos[i], hsml[i], zone_lo, zone_hi, zone_h)
+            if child <= hsml[i] * p.dx * p.inv_h:
+                spawned[i] = 1
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def relevel(p: Params, pos: wp.array(dtype=vec), vel: wp.array(dtype=vec), hsml: wp.array(dtype=scalar),
+                ptype: wp.array(dtype=wp.int32), needs_list: wp.array(dtype=wp.int32),
+                zone_lo: wp.array(dtype=vec), zone_hi: wp.array(dtype=vec), zone_h: wp.array(dtype=scalar),
+                spawned: wp.array(dtype=wp.int32), want: wp.array(dtype=wp.int32), vacant: wp.array(dtype=wp.int32),
+                stale: wp.array(dtype=wp.int32)):
+        """Each fluid particle's kind from where it stands; ``want`` the active ones to give
+        daughters, ``vacant`` the free slots."""
+        i = wp.tid()
+        want[i] = 0
+        vacant[i] = 0
+        t = ptype[i]
+        if t == VACANT:
+            vacant[i] = 1
+            return
+        if not carries_fluid(t):
+            return
+        h_i = hsml[i]
+        s_i = h_i * p.dx * p.inv_h
+        finer, own, child = place(p, pos[i], h_i, zone_lo, zone_hi, zone_h)
+        kind = FLUID
+        if finer != 0:
+            kind = PASSIVE
+        elif h_i < p.h * scalar(0.999) and own > scalar(0.0):
+            kind = PASSIVE
+            if own > band(p, h_i) + scalar(2.0) * s_i:  # past where a parent's daughters are made
+                kind = VACANT
+        ptype[i] = kind
+        if kind == VACANT:
+            needs_list[i] = 0
+            vel[i] = vec(scalar(0.0))
+            vacant[i] = 1
+            stale[0] = 1
+            return
+        if child > scalar(2.0) * s_i:  # its last daughters are gone: a return makes new ones
+            spawned[i] = 0
+        elif kind == FLUID and spawned[i] == 0 and child <= scalar(0.5) * s_i:
+            want[i] = 1
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def free_slots(vacant: wp.array(dtype=wp.int32), vacant_rank: wp.array(dtype=wp.int32),
+                   free: wp.array(dtype=wp.int32)):
+        """free[r] = the r-th vacant slot."""
+        j = wp.tid()
+        if vacant[j] != 0:
+            free[vacant_rank[j]] = j
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def spawn(p: Params, want: wp.array(dtype=wp.int32), want_rank: wp.array(dtype=wp.int32),
+              vacant: wp.array(dtype=wp.int32), vacant_rank: wp.array(dtype=wp.int32), free: wp.array(dtype=wp.int32),
+              offsets: wp.array(dtype=vec), pos: wp.array(dtype=vec), vel: wp.array(dtype=vec),
+              rho: wp.array(dtype=scalar), mass: wp.array(dtype=scalar), hsml: wp.array(dtype=scalar),
+              ptype: wp.array(dtype=wp.int32), body: wp.array(dtype=wp.int32), needs_list: wp.array(dtype=wp.int32),
+              spawned: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32), stale: wp.array(dtype=wp.int32),
+              fail: wp.array(dtype=wp.int32), fail_slot: int):
+        """Each wanting particle's 2^dim passive daughters, into the free slots in rank order; a
+        particle finding too few left flags ``fail_slot``."""
+        i = wp.tid()
+        if want[i] == 0:
+            return
+        n = want.shape[0]
+        count = offsets.shape[0]
+        base = want_rank[i] * count
+        if base + count > vacant_rank[n - 1] + vacant[n - 1]:
+            wp.atomic_min(fail, fail_slot, ids[i])
+            return
+        s_i = hsml[i] * p.dx * p.inv_h
+        for q in range(count):
+            j = free[base + q]
+            pos[j] = pos[i] + s_i * offsets[q]
+            vel[j] = vel[i]
+            rho[j] = rho[i]
+            mass[j] = mass[i] / scalar(count)
+            hsml[j] = scalar(0.5) * hsml[i]
+            ptype[j] = PASSIVE
+            body[j] = -1
+            needs_list[j] = 1
+            spawned[j] = 0
+        spawned[i] = 1
+        stale[0] = 1
+
+    return SimpleNamespace(passive_state=passive_state, mark_spawned=mark_spawned, relevel=relevel,
+                           free_slots=free_slots, spawn=spawn)

@@ -370,11 +370,12 @@ def _time_passes(scalar):
     def permute(order: wp.array(dtype=wp.int32), pos: wp.array(dtype=vec), vel: wp.array(dtype=vec),
                 rho: wp.array(dtype=scalar), mass: wp.array(dtype=scalar), hsml: wp.array(dtype=scalar),
                 ptype: wp.array(dtype=wp.int32), body: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32),
-                needs: wp.array(dtype=wp.int32), ghost: wp.array(dtype=vec), pos_o: wp.array(dtype=vec),
+                needs: wp.array(dtype=wp.int32), ghost: wp.array(dtype=vec), spawned: wp.array(dtype=wp.int32),
+                pos_o: wp.array(dtype=vec),
                 vel_o: wp.array(dtype=vec), rho_o: wp.array(dtype=scalar), mass_o: wp.array(dtype=scalar),
                 hsml_o: wp.array(dtype=scalar), ptype_o: wp.array(dtype=wp.int32),
                 body_o: wp.array(dtype=wp.int32), ids_o: wp.array(dtype=wp.int32), needs_o: wp.array(dtype=wp.int32),
-                ghost_o: wp.array(dtype=vec)):
+                ghost_o: wp.array(dtype=vec), spawned_o: wp.array(dtype=wp.int32)):
         """Gather the per-particle state into cell order (``order`` from the cell sort)."""
         k = wp.tid()
         i = order[k]
@@ -388,6 +389,7 @@ def _time_passes(scalar):
         ids_o[k] = ids[i]
         needs_o[k] = needs[i]
         ghost_o[k] = ghost[i]
+        spawned_o[k] = spawned[i]
 
     @wp.kernel(enable_backward=False, module="unique")
     def tick(fail: wp.array(dtype=wp.int32), clock: wp.array(dtype=wp.float64), steps: wp.array(dtype=wp.int32)):
@@ -409,5 +411,4 @@ def build(scalar):
     S, H = state.build(scalar), health.build(scalar)
     return SimpleNamespace(Params=S.Params, Fields=S.Fields, check_particles=H.check_particles,
                            exclusion_check=H.exclusion_check, census=H.census,
-                           census_check=H.census_check, check_zone_edges=H.check_zone_edges,
-                           **vars(_force_passes(scalar)), **vars(_time_passes(scalar)))
+                           census_check=H.census_check, **vars(_force_passes(scalar)), **vars(_time_passes(scalar)))

@@ -17,7 +17,7 @@ from .health import HealthError
 from .launch import Launcher
 from .neighbours import NeighbourList, NeighbourOverflow, default_max_neighbours
 from .particles import Particles
-from .state import DT, DT_STABLE, EXCLUDED, FAILED_STEP, FLUID, N_CLOCK, PASSIVE, STEP, T_FAILED, T
+from .state import DT, DT_STABLE, EXCLUDED, FAILED_STEP, FLUID, N_CLOCK, PASSIVE, STEP, T_FAILED, VACANT, T
 
 _MAX_BATCH = 64  # steps launched between two reads of the clock
 # steps between two sorts of the particle arrays into cell order: neighbours then sit next to each
@@ -50,7 +50,7 @@ class Solver:
         self.boundary = boundaries.model(cfg.boundary)
         self._fluid_mass = float(particles.mass[particles.ptype == FLUID].sum())
         self.n_fluid = int((particles.ptype == FLUID).sum())
-        self.n_passive = int((particles.ptype == PASSIVE).sum())  # refinement levels' (levels.py)
+        self.leveled = bool(np.isin(particles.ptype, (PASSIVE, VACANT)).any())  # refinement levels (levels.py)
         spacing = particles.spacing if particles.spacing is not None else np.full(self.n, cfg.dx)
         if np.any(spacing <= 0.0) or np.any(spacing > cfg.dx * (1.0 + 1.0e-9)):
             raise ValueError(f"particles: spacings above 0 and at most dx = {cfg.dx:g} m (a refinement zone is "
@@ -114,6 +114,7 @@ class Solver:
         self.ghost = wp.zeros(n, dtype=v, device=dev)  # mDBC's ghost-node offsets (boundaries/mdbc.py); else zero
         self._sorted = [wp.empty_like(a) for a in (self.pos, self.vel, self.rho, self.mass, self.hsml, self.ptype,
                                                    self.body, self.ids, self._needs_list, self.ghost)]
+        self._sorted.append(wp.empty(n, dtype=wp.int32, device=dev))  # the levels' spawned flags, made below
         self.pressure = wp.zeros(n, dtype=s, device=dev)
         # half-step and candidate states, rates of change
         self._pos_h, self._vel_h, self._rho_h = (wp.zeros_like(a) for a in (self.pos, self.vel, self.rho))
@@ -138,6 +139,13 @@ class Solver:
         self._zone_lo = arr(np.asarray([lo for lo, _, _ in zones], dtype=np.float64), v)
         self._zone_hi = arr(np.asarray([hi for _, hi, _ in zones], dtype=np.float64), v)
         self._zone_h = arr(np.asarray([cfg.hdx * spacing for _, _, spacing in zones], dtype=np.float64), s)
+        # refinement levels (levels.py): which fluid has its daughters; with zones, which wants them,
+        # the free slots, their ranks, and the daughters' offsets in their parent's spacing
+        self._spawned = wp.zeros(n, dtype=wp.int32, device=dev)
+        m = n if cfg.zones else 1
+        self._want, self._vacant, self._want_rank, self._vacant_rank, self._free = (
+            wp.zeros(m, dtype=wp.int32, device=dev) for _ in range(5))
+        self._offsets = arr(levels.sub_offsets(2, cfg.dim), v)
         self._fail = arr(np.full(health.N_CHECKS, health.NO_FAILURE, dtype=np.int32), wp.int32)
         # the census sums (health.CENSUS_START); clumped fluid particles and the first of them
         self._energy_sum = arr(np.array(health.CENSUS_START), wp.float64)
@@ -154,6 +162,10 @@ class Solver:
         self._steps = arr(np.array([0, -1], dtype=np.int32), wp.int32)  # slots state.STEP, FAILED_STEP
         wp.launch(self._passes.equation_of_state, dim=n, inputs=[self.params, self.fields], device=dev)
         self.boundary.prepare(self)
+        if cfg.zones:
+            wp.launch(levels.build(s).mark_spawned, dim=n, inputs=[self.params, self.pos, self.hsml, self.ptype,
+                                                                   self._zone_lo, self._zone_hi, self._zone_h,
+                                                                   self._spawned], device=dev)
 
     def _make_fields(self, pos, vel, rho, shared: dict):
         f = self._passes.Fields()
@@ -175,7 +187,7 @@ class Solver:
 
     def _reorder(self):
         state = [self.pos, self.vel, self.rho, self.mass, self.hsml, self.ptype, self.body, self.ids,
-                 self._needs_list, self.ghost]
+                 self._needs_list, self.ghost, self._spawned]
         order = self.neighbours.sort(self.pos)
         wp.launch(self._passes.permute, dim=self.n, inputs=[order, *state, *self._sorted], device=self.device)
         for dst, src in zip(state, self._sorted):
@@ -203,9 +215,6 @@ class Solver:
                   inputs=[p, self.pos, self._pos_c, self._vel_c, self._rho_c, self.mass, self.hsml, self.ptype,
                           self.ids, self.solid_lo, self.solid_hi, self._fail, self._faulty, self._pending,
                           self._pending_mass], device=dev)
-        if self.config.zones:
-            wp.launch(k.check_zone_edges, dim=n, inputs=[p, self._pos_c, self.hsml, self.ptype, self.ids, self._zone_lo,
-                                                         self._zone_hi, self._zone_h, self._fail], device=dev)
         if self._launched % _CENSUS_EVERY == 0:
             self._energy_sum[health.ENERGY:health.ENERGY + 1].zero_()
             wp.launch(k.census, dim=n, inputs=[p, self._pos_c, self._vel_c, self._rho_c, self.mass, self.ptype,
@@ -222,12 +231,30 @@ class Solver:
         wp.launch(k.commit, dim=n, inputs=[self._fail, self._faulty, self._pos_c, self._vel_c, self._rho_c, self.pos,
                                            self.vel, self.rho, self.ptype, self._needs_list, self.neighbours.stale],
                   device=dev)
+        if self.config.zones:
+            self._relevel()
         wp.launch(k.tick, dim=1, inputs=[self._fail, self._clock, self._steps], device=dev)
         self.neighbours.moved(self.pos)
         self._launched += 1
         every = self.config.shepard_every
         if every and self._launched % every == 0:
             self.shepard_filter(rebuild=False)
+
+    def _relevel(self):
+        """Each fluid particle's level kind from where it stands, and daughters for the fluid that
+        reaches a finer level's band (levels.py)."""
+        n, dev, p, L = self.n, self.device, self.params, levels.build(self.scalar)
+        stale = self.neighbours.stale
+        wp.launch(L.relevel, dim=n, inputs=[p, self.pos, self.vel, self.hsml, self.ptype, self._needs_list,
+                                            self._zone_lo, self._zone_hi, self._zone_h, self._spawned, self._want,
+                                            self._vacant, stale], device=dev)
+        wp.utils.array_scan(self._want, self._want_rank, inclusive=False)
+        wp.utils.array_scan(self._vacant, self._vacant_rank, inclusive=False)
+        wp.launch(L.free_slots, dim=n, inputs=[self._vacant, self._vacant_rank, self._free], device=dev)
+        wp.launch(L.spawn, dim=n, inputs=[p, self._want, self._want_rank, self._vacant, self._vacant_rank, self._free,
+                                          self._offsets, self.pos, self.vel, self.rho, self.mass, self.hsml,
+                                          self.ptype, self.body, self._needs_list, self._spawned, self.ids, stale,
+                                          self._fail, health.ZONE_RESERVE], device=dev)
 
     def shepard_filter(self, rebuild: bool = True):
         """Replace the fluid density by its Shepard average (thesis Eq. 2.28)."""
@@ -263,9 +290,9 @@ class Solver:
                                   f"{e[health.ENERGY] - e[health.ENERGY_START]:.3g} J above its start "
                                   f"({self.config.energy_growth_ratio:g} M g H = {self._energy_slack:.3g} J allowed)")
             detail = ""
-            if check == "zone_edge":
-                detail = ("fluid crossed the edge of a refinement zone (refine:), which this version cannot "
-                          "follow: its particles do not change level yet, so keep zones where fluid stays")
+            if check == "zone_reserve":
+                detail = ("the fluid reaching a refinement zone (refine:) needs more fine particles than the "
+                          "build reserved for it")
             if check == "clumping":
                 clumped = self._energy_sum.numpy()[health.PEAK_CLUMPED]
                 detail = (f"{clumped:.1%} of the fluid particles have a neighbour closer than "
@@ -321,11 +348,11 @@ class Solver:
         return ", ".join(f"{r} {int(c)}" for r, c in zip(health.REASONS, counts) if c) or "none"
 
     def kept(self) -> np.ndarray:
-        """Which particles, in the caller's order, are the flow and its walls: not excluded, and
-        not a refinement level's passive particles (levels.py), which stand where another level is
-        the flow."""
+        """Which particles, in the caller's order, are the flow and its walls: not excluded, not a
+        refinement level's passive particles (levels.py), which stand where another level is the
+        flow, nor its vacant slots."""
         keep = np.empty(self.n, dtype=bool)
-        keep[self.ids.numpy()] = ~np.isin(self.ptype.numpy(), (EXCLUDED, PASSIVE))
+        keep[self.ids.numpy()] = ~np.isin(self.ptype.numpy(), (EXCLUDED, PASSIVE, VACANT))
         return keep
 
     def reached(self, t_target: float) -> bool:

@@ -13,6 +13,9 @@ EXCLUDED = 2  # a fluid particle taken out of the flow by a fault (health.py): n
 # its own level's particles read it as fluid, its velocity and density are interpolated from the
 # level that is active there, and nothing measured or counted reads it
 PASSIVE = 3
+# a free slot: a refinement level's particle that left its level's reach, or a slot the build
+# reserved for the particles a level makes as fluid arrives (levels.py); no pass reads it
+VACANT = 4
 
 
 @wp.func

@@ -81,11 +81,10 @@ MODEL = Mdbc()
 @functools.lru_cache(maxsize=None)
 def build(scalar):
     vec = wp.types.vector(3, scalar)
-    vec4 = wp.types.vector(4, scalar)
-    mat44 = wp.types.matrix((4, 4), scalar)
-    same_level = kernels.build(scalar).same_level
     interp = interpolate.build(scalar)
+    vec4, mat44, no_sums = interp.vec4, interp.mat44, interp.no_sums
     ghost_term, corrected_density = interp.corrected_term, interp.corrected_density
+    same_level = kernels.build(scalar).same_level
     N = neighbours.grid(scalar)
     Grid, cell_coord, cells_around, cell_around = N.Grid, N.cell_coord, N.cells_around, N.cell_around
     S = state.build(scalar)
@@ -162,9 +161,7 @@ def build(scalar):
             return
         off = ghost[i]
         xg = f.pos[i] + off
-        a = mat44(scalar(0.0))
-        rhs = vec4(scalar(0.0))
-        u = vec(scalar(0.0))
+        a, rhs, u = no_sums()
         base = i * grid.max_neighbours
         h_g = f.hsml[i]
         for k in range(count[i]):
@@ -195,9 +192,7 @@ def build(scalar):
         off = dx * normals[k]
         h_g = p.h * dx / p.dx  # a face reads at its own spacing
         xg = points[k] + off
-        a = mat44(scalar(0.0))
-        rhs = vec4(scalar(0.0))
-        u = vec(scalar(0.0))
+        a, rhs, u = no_sums()
         ci = cell_coord(grid, xg)
         for c in range(cells_around(grid)):
             cell = cell_around(grid, ci, c)
