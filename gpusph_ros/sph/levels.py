@@ -136,10 +136,13 @@ def build(scalar):
     def relevel(p: Params, pos: wp.array(dtype=vec), vel: wp.array(dtype=vec), hsml: wp.array(dtype=scalar),
                 ptype: wp.array(dtype=wp.int32), needs_list: wp.array(dtype=wp.int32),
                 zone_lo: wp.array(dtype=vec), zone_hi: wp.array(dtype=vec), zone_h: wp.array(dtype=scalar),
-                spawned: wp.array(dtype=wp.int32), want: wp.array(dtype=wp.int32), vacant: wp.array(dtype=wp.int32),
-                stale: wp.array(dtype=wp.int32)):
+                spawned: wp.array(dtype=wp.int32), want: wp.array(dtype=wp.int32), vacant: wp.array(dtype=wp.int32)):
         """Each fluid particle's kind from where it stands; ``want`` the active ones to give
-        daughters, ``vacant`` the free slots."""
+        daughters, ``vacant`` the free slots.
+
+        No change of kind makes the lists stale: a particle is removed two spacings past its band,
+        beyond every active particle's list, and a particle turned passive keeps its values until
+        the next build lists the other level for it."""
         i = wp.tid()
         want[i] = 0
         vacant[i] = 0
@@ -164,7 +167,6 @@ def build(scalar):
             needs_list[i] = 0
             vel[i] = vec(scalar(0.0))
             vacant[i] = 1
-            stale[0] = 1
             return
         if child > scalar(2.0) * s_i:  # its last daughters are gone: a return makes new ones
             spawned[i] = 0
@@ -185,10 +187,12 @@ def build(scalar):
               offsets: wp.array(dtype=vec), pos: wp.array(dtype=vec), vel: wp.array(dtype=vec),
               rho: wp.array(dtype=scalar), mass: wp.array(dtype=scalar), hsml: wp.array(dtype=scalar),
               ptype: wp.array(dtype=wp.int32), body: wp.array(dtype=wp.int32), needs_list: wp.array(dtype=wp.int32),
-              spawned: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32), stale: wp.array(dtype=wp.int32),
+              spawned: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32), x_build: wp.array(dtype=vec),
               fail: wp.array(dtype=wp.int32), fail_slot: int):
         """Each wanting particle's 2^dim passive daughters, into the free slots in rank order; a
-        particle finding too few left flags ``fail_slot``."""
+        particle finding too few left flags ``fail_slot``. The daughters, made past every active
+        particle's list, join the lists at their next build, which their ``x_build`` does not
+        hasten."""
         i = wp.tid()
         if want[i] == 0:
             return
@@ -210,8 +214,8 @@ def build(scalar):
             body[j] = -1
             needs_list[j] = 1
             spawned[j] = 0
+            x_build[j] = pos[j]
         spawned[i] = 1
-        stale[0] = 1
 
     return SimpleNamespace(passive_state=passive_state, mark_spawned=mark_spawned, relevel=relevel,
                            free_slots=free_slots, spawn=spawn)

@@ -21,7 +21,7 @@ from types import SimpleNamespace
 import numpy as np
 import warp as wp
 
-from .state import BOUNDARY, carries_fluid
+from .state import BOUNDARY, FLUID, PASSIVE, VACANT, carries_fluid
 
 # lists reach LIST_SKIN kernel supports; a list stays valid until some particle has moved half the
 # difference since it was built (a Verlet list)
@@ -136,11 +136,14 @@ def build(scalar):
     Grid, separation, cell_coord, neighbour_cell = G.Grid, G.separation, G.cell_coord, G.neighbour_cell
 
     @wp.kernel(enable_backward=False, module="unique")
-    def cell_keys(grid: Grid, pos: wp.array(dtype=vec), keys: wp.array(dtype=wp.int32),
-                  values: wp.array(dtype=wp.int32)):
+    def cell_keys(grid: Grid, pos: wp.array(dtype=vec), ptype: wp.array(dtype=wp.int32),
+                  keys: wp.array(dtype=wp.int32), values: wp.array(dtype=wp.int32)):
+        """Each particle's cell; a vacant slot (levels.py) sorts past the last cell, in none."""
         i = wp.tid()
         c = cell_coord(grid, pos[i])
         keys[i] = (c[2] * grid.dims[1] + c[1]) * grid.dims[0] + c[0]
+        if ptype[i] == VACANT:
+            keys[i] = grid.dims[0] * grid.dims[1] * grid.dims[2]
         values[i] = i
 
     @wp.kernel(enable_backward=False, module="unique")
@@ -148,6 +151,8 @@ def build(scalar):
                     end: wp.array(dtype=wp.int32)):
         k = wp.tid()
         c = keys[k]
+        if c >= start.shape[0]:  # the vacant slots
+            return
         if k == 0 or keys[k - 1] != c:
             start[c] = k
         if k == n - 1 or keys[k + 1] != c:
@@ -198,6 +203,7 @@ def build(scalar):
             count[i] = 0
             return
         fluid_i = carries_fluid(ptype_sorted[ki])
+        passive_i = ptype_sorted[ki] == PASSIVE
         xi = pos_sorted[ki]
         off = ghost[i]
         two_centres = wp.dot(off, off) > scalar(0.0)
@@ -221,14 +227,19 @@ def build(scalar):
                     if cell >= 0:
                         for k in range(start[cell], end[cell]):
                             # a boundary particle needs only its fluid neighbours (active or
-                            # passive); an excluded particle is nobody's neighbour
+                            # passive); an excluded particle is nobody's neighbour; with levels
+                            # a particle needs its own level's, a passive one the active fluid
+                            # of the others too (levels.py)
                             t_k = ptype_sorted[k]
-                            if k != ki and (carries_fluid(t_k) or (fluid_i and t_k == BOUNDARY)):
+                            listed = k != ki and (carries_fluid(t_k) or (fluid_i and t_k == BOUNDARY))
+                            radius2 = grid.radius2
+                            if listed and grid.variable != 0:
+                                if hsml_sorted[ki] != hsml_sorted[k] and not (passive_i and t_k == FLUID):
+                                    listed = False
+                                h_ab = scalar(0.5) * (hsml_sorted[ki] + hsml_sorted[k])
+                                radius2 = radius2 * h_ab * h_ab * grid.inv_h2
+                            if listed:
                                 r = separation(grid, xi, pos_sorted[k])
-                                radius2 = grid.radius2
-                                if grid.variable != 0:
-                                    h_ab = scalar(0.5) * (hsml_sorted[ki] + hsml_sorted[k])
-                                    radius2 = radius2 * h_ab * h_ab * grid.inv_h2
                                 near = wp.dot(r, r) < radius2
                                 if two_centres and not near:
                                     rg = r + off
@@ -312,6 +323,11 @@ class NeighbourList:
         self.stale = wp.ones(1, dtype=wp.int32, device=device)
         self.builds = wp.zeros(1, dtype=wp.int32, device=device)  # how many times the lists were built
 
+    @property
+    def x_build(self) -> wp.array:
+        """Each particle's position when the lists were last built (a particle made since sets its own)."""
+        return self._x_build
+
     def moved(self, pos: wp.array):
         """Note the particles' new positions: the lists go stale if any moved too far."""
         wp.launch(self._passes.check_displacement, dim=self.n, inputs=[self.grid, pos, self._x_build, self.stale],
@@ -320,7 +336,8 @@ class NeighbourList:
     def sort(self, pos: wp.array) -> wp.array:
         """Sort the particles by cell; returns the particle index of each sorted position."""
         n = self.n
-        wp.launch(self._passes.cell_keys, dim=n, inputs=[self.grid, pos, self._keys, self._order], device=self.device)
+        wp.launch(self._passes.cell_keys, dim=n, inputs=[self.grid, pos, self._ptype, self._keys, self._order],
+                  device=self.device)
         wp.utils.radix_sort_pairs(self._keys, self._order, n)
         return self._order
 

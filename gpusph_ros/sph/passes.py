@@ -26,6 +26,7 @@ from . import boundaries, density, eos, health, kernels, momentum, neighbours, s
 FLUID = state.FLUID
 BOUNDARY = state.BOUNDARY
 carries_fluid = state.carries_fluid
+VACANT = state.VACANT
 EXCLUDED = state.EXCLUDED
 T, DT, DT_STABLE, T_FAILED = state.T, state.DT, state.DT_STABLE, state.T_FAILED
 STEP, FAILED_STEP = state.STEP, state.FAILED_STEP
@@ -81,6 +82,8 @@ def _force_passes(scalar):
         if r >= scalar(2.0) * h or not same_level(p, f.hsml[a], f.hsml[b]):
             return zero, scalar(0.0), zero, scalar(0.0), zero
         t_b = f.ptype[b]
+        if t_b == VACANT:  # a slot a refinement level vacated this step (levels.py)
+            return zero, scalar(0.0), zero, scalar(0.0), zero
         if t_b == BOUNDARY and p.wall_volume == 0:  # walls without fluid volume push
             return repulsion(p, f.mass[a], f.mass[b], r_ab, r), scalar(0.0), zero, scalar(0.0), zero
         m_b = f.mass[b]

@@ -244,17 +244,16 @@ class Solver:
         """Each fluid particle's level kind from where it stands, and daughters for the fluid that
         reaches a finer level's band (levels.py)."""
         n, dev, p, L = self.n, self.device, self.params, levels.build(self.scalar)
-        stale = self.neighbours.stale
         wp.launch(L.relevel, dim=n, inputs=[p, self.pos, self.vel, self.hsml, self.ptype, self._needs_list,
                                             self._zone_lo, self._zone_hi, self._zone_h, self._spawned, self._want,
-                                            self._vacant, stale], device=dev)
+                                            self._vacant], device=dev)
         wp.utils.array_scan(self._want, self._want_rank, inclusive=False)
         wp.utils.array_scan(self._vacant, self._vacant_rank, inclusive=False)
         wp.launch(L.free_slots, dim=n, inputs=[self._vacant, self._vacant_rank, self._free], device=dev)
         wp.launch(L.spawn, dim=n, inputs=[p, self._want, self._want_rank, self._vacant, self._vacant_rank, self._free,
                                           self._offsets, self.pos, self.vel, self.rho, self.mass, self.hsml,
-                                          self.ptype, self.body, self._needs_list, self._spawned, self.ids, stale,
-                                          self._fail, health.ZONE_RESERVE], device=dev)
+                                          self.ptype, self.body, self._needs_list, self._spawned, self.ids,
+                                          self.neighbours.x_build, self._fail, health.ZONE_RESERVE], device=dev)
 
     def shepard_filter(self, rebuild: bool = True):
         """Replace the fluid density by its Shepard average (thesis Eq. 2.28)."""

@@ -166,7 +166,8 @@ def build(scalar):
         h_g = f.hsml[i]
         for k in range(count[i]):
             j = nbr[base + k]
-            if same_level(p, h_g, f.hsml[j]):
+            # a slot vacated this step may still be listed (levels.py)
+            if state.carries_fluid(f.ptype[j]) and same_level(p, h_g, f.hsml[j]):
                 a, rhs, u = ghost_term(p, grid, f, xg, h_g, j, a, rhs, u)
         f.rho[i] = tait_density(p, cloned_pressure(p, ghost_density(p, a, rhs, h_g), -off))
         u_b = vec(scalar(0.0))
