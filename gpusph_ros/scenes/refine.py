@@ -14,7 +14,7 @@ boundary) reaches on through that wall, so its wall particles are split too.
 import numpy as np
 
 from ..sph.config import ConfigError
-from ..sph.levels import sub_offsets
+from ..sph.levels import band_width, sub_offsets
 from ..sph.state import FLUID, PASSIVE, VACANT
 
 
@@ -65,24 +65,21 @@ def distance_outside(pos: np.ndarray, lo: np.ndarray, hi: np.ndarray, dim: int) 
 
 
 def daughters(columns: dict, spacing: np.ndarray, parents: np.ndarray, target: float, dim: int, stratify=None):
-    """The daughters of ``parents`` (indices) at spacing ``target``, as columns and spacings."""
-    ks = np.rint(spacing[parents] / target).astype(int)
-    new = {name: [] for name in columns}
-    for k in np.unique(ks):
-        group = parents[ks == k]
-        offsets = sub_offsets(int(k), dim)
-        count = len(offsets)
-        shift = np.tile(offsets, (len(group), 1)) * np.repeat(spacing[group], count)[:, None]
-        for name, values in columns.items():
-            rows = np.repeat(values[group], count, axis=0)
-            if name == "pos":
-                rows = rows + shift
-            elif name == "mass":
-                rows = rows / count
-            new[name].append(rows)
-        if stratify is not None:
-            new["rho"][-1] = stratify(new["rho"][-1], shift[:, dim - 1])
-    out = {name: np.concatenate(rows) if rows else columns[name][:0] for name, rows in new.items()}
+    """The 2^dim daughters of ``parents`` (indices, each of spacing 2 ``target``) at spacing
+    ``target``, as columns and spacings."""
+    offsets = sub_offsets(2, dim)
+    count = len(offsets)
+    shift = np.tile(offsets, (len(parents), 1)) * np.repeat(spacing[parents], count)[:, None]
+    out = {}
+    for name, values in columns.items():
+        rows = np.repeat(values[parents], count, axis=0)
+        if name == "pos":
+            rows = rows + shift
+        elif name == "mass":
+            rows = rows / count
+        out[name] = rows
+    if stratify is not None:
+        out["rho"] = stratify(out["rho"], shift[:, dim - 1])
     return out, np.full(len(out["pos"]), target)
 
 
@@ -106,7 +103,7 @@ def split(columns: dict, spacing: np.ndarray, zones, tank, dim: int, dx: float, 
         lo, hi = zone_bounds(zone, tank, dim)
         pos = columns["pos"]
         parent_level = (np.abs(spacing - 2.0 * target) < 1e-9 * dx) & (columns["ptype"] != PASSIVE)
-        reach = 2.0 * hdx * target + 0.5 * target
+        reach = band_width(target, hdx)
         near = distance_outside(pos, lo, hi, dim) <= reach + spacing  # a daughter lies within spacing / 2
         inside = parent_level & np.all((pos[:, :dim] >= lo) & (pos[:, :dim] <= hi), axis=1)
         band = parent_level & near & ~inside
@@ -141,7 +138,7 @@ def reserve(columns: dict, spacing: np.ndarray, zones, tank, dim: int, dx: float
     for zone in zones:
         target = zone.ratio * dx
         lo, hi = zone_bounds(zone, tank, dim)
-        reach = 2.0 * hdx * target + 0.5 * target
+        reach = band_width(target, hdx)
         lo_c = np.maximum(lo - reach, 0.0)
         hi_c = np.minimum(hi + reach, np.asarray(tank[:dim], dtype=float))
         cells = float(np.prod((hi_c - lo_c) / target))

@@ -43,6 +43,12 @@ carries_fluid = state.carries_fluid
 FAR = 1.0e30
 
 
+def band_width(spacing: float, hdx: float) -> float:
+    """How far outside its zone a level of ``spacing`` keeps passive particles: its kernel support
+    (2 h, h = hdx x spacing) and half its spacing (the build's band, scenes/refine.py)."""
+    return 2.0 * hdx * spacing + 0.5 * spacing
+
+
 def sub_offsets(k: int, dim: int) -> np.ndarray:
     """The k^dim daughters' offsets from their parent's centre in units of its spacing."""
     c = (np.arange(k) + 0.5) / k - 0.5
@@ -95,8 +101,7 @@ def build(scalar):
 
     @wp.func
     def band(p: Params, h: scalar) -> scalar:
-        """How far outside its zone a level of smoothing length h keeps passive particles: its
-        kernel support and half its spacing (scenes/refine.py builds the same band)."""
+        """``band_width`` on the device, for a level of smoothing length h."""
         return scalar(2.0) * h + scalar(0.5) * h * p.dx * p.inv_h
 
     @wp.func
@@ -133,7 +138,7 @@ def build(scalar):
                 spawned[i] = 1
 
     @wp.kernel(enable_backward=False, module="unique")
-    def relevel(p: Params, pos: wp.array(dtype=vec), vel: wp.array(dtype=vec), hsml: wp.array(dtype=scalar),
+    def relevel(p: Params, pos: wp.array(dtype=vec), hsml: wp.array(dtype=scalar),
                 ptype: wp.array(dtype=wp.int32), needs_list: wp.array(dtype=wp.int32),
                 zone_lo: wp.array(dtype=vec), zone_hi: wp.array(dtype=vec), zone_h: wp.array(dtype=scalar),
                 spawned: wp.array(dtype=wp.int32), want: wp.array(dtype=wp.int32), vacant: wp.array(dtype=wp.int32)):
@@ -165,7 +170,6 @@ def build(scalar):
         ptype[i] = kind
         if kind == VACANT:
             needs_list[i] = 0
-            vel[i] = vec(scalar(0.0))
             vacant[i] = 1
             return
         if child > scalar(2.0) * s_i:  # its last daughters are gone: a return makes new ones

@@ -50,7 +50,6 @@ class Solver:
         self.boundary = boundaries.model(cfg.boundary)
         self._fluid_mass = float(particles.mass[particles.ptype == FLUID].sum())
         self.n_fluid = int((particles.ptype == FLUID).sum())
-        self.leveled = bool(np.isin(particles.ptype, (PASSIVE, VACANT)).any())  # refinement levels (levels.py)
         spacing = particles.spacing if particles.spacing is not None else np.full(self.n, cfg.dx)
         if np.any(spacing <= 0.0) or np.any(spacing > cfg.dx * (1.0 + 1.0e-9)):
             raise ValueError(f"particles: spacings above 0 and at most dx = {cfg.dx:g} m (a refinement zone is "
@@ -112,9 +111,9 @@ class Solver:
         needs = np.isin(particles.ptype, (FLUID, PASSIVE)) | (particles.body >= 0) | self.boundary.volume
         self._needs_list = arr(needs.astype(np.int32), wp.int32)
         self.ghost = wp.zeros(n, dtype=v, device=dev)  # mDBC's ghost-node offsets (boundaries/mdbc.py); else zero
+        self._spawned = wp.zeros(n, dtype=wp.int32, device=dev)  # refinement levels: which fluid has daughters
         self._sorted = [wp.empty_like(a) for a in (self.pos, self.vel, self.rho, self.mass, self.hsml, self.ptype,
-                                                   self.body, self.ids, self._needs_list, self.ghost)]
-        self._sorted.append(wp.empty(n, dtype=wp.int32, device=dev))  # the levels' spawned flags, made below
+                                                   self.body, self.ids, self._needs_list, self.ghost, self._spawned)]
         self.pressure = wp.zeros(n, dtype=s, device=dev)
         # half-step and candidate states, rates of change
         self._pos_h, self._vel_h, self._rho_h = (wp.zeros_like(a) for a in (self.pos, self.vel, self.rho))
@@ -139,9 +138,8 @@ class Solver:
         self._zone_lo = arr(np.asarray([lo for lo, _, _ in zones], dtype=np.float64), v)
         self._zone_hi = arr(np.asarray([hi for _, hi, _ in zones], dtype=np.float64), v)
         self._zone_h = arr(np.asarray([cfg.hdx * spacing for _, _, spacing in zones], dtype=np.float64), s)
-        # refinement levels (levels.py): which fluid has its daughters; with zones, which wants them,
-        # the free slots, their ranks, and the daughters' offsets in their parent's spacing
-        self._spawned = wp.zeros(n, dtype=wp.int32, device=dev)
+        # refinement levels (levels.py), with zones: which fluid wants daughters, the free slots,
+        # their ranks, and the daughters' offsets in their parent's spacing
         m = n if cfg.zones else 1
         self._want, self._vacant, self._want_rank, self._vacant_rank, self._free = (
             wp.zeros(m, dtype=wp.int32, device=dev) for _ in range(5))
@@ -177,7 +175,7 @@ class Solver:
     # -- stepping -----------------------------------------------------------------------
     def _forces(self, f):
         n, p, nl, k = self.n, self.params, self.neighbours, self._passes
-        if p.variable_h != 0:
+        if self.config.zones:
             self.launch(levels.build(self.scalar).passive_state, n, [p, nl.grid, nl.nbr, nl.count, f])
         wp.launch(k.equation_of_state, dim=n, inputs=[p, f], device=self.device)
         if self.config.viscosity == "sps":
@@ -244,7 +242,7 @@ class Solver:
         """Each fluid particle's level kind from where it stands, and daughters for the fluid that
         reaches a finer level's band (levels.py)."""
         n, dev, p, L = self.n, self.device, self.params, levels.build(self.scalar)
-        wp.launch(L.relevel, dim=n, inputs=[p, self.pos, self.vel, self.hsml, self.ptype, self._needs_list,
+        wp.launch(L.relevel, dim=n, inputs=[p, self.pos, self.hsml, self.ptype, self._needs_list,
                                             self._zone_lo, self._zone_hi, self._zone_h, self._spawned, self._want,
                                             self._vacant], device=dev)
         wp.utils.array_scan(self._want, self._want_rank, inclusive=False)

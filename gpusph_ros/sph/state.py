@@ -87,7 +87,7 @@ def build(scalar):
         wall_hi: vec
         penetration: scalar  # penetration_ratio dx
         n_solids: int
-        n_zones: int  # refinement zones (levels.py); 0: no particle's level is checked against its place
+        n_zones: int  # refinement zones (levels.py): where each level's particles are active
         clump_r: scalar  # clump_ratio dx
         clump_wall: scalar  # health.CLUMP_WALL_DX dx: no clumping counted closer to a wall
         clump_fraction: wp.float64
