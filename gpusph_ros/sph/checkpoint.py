@@ -49,7 +49,8 @@ def device_arrays(solver) -> dict:
 
 # rebuilt on restore instead of stored (four fifths of a checkpoint): the lists and the sorted copies
 # they were built from, which a rebuild from the stored build positions gives again, pair for pair
-REBUILT = ("neighbours.nbr", "neighbours.count", "neighbours._pos_sorted", "neighbours._ptype_sorted")
+REBUILT = ("neighbours.nbr", "neighbours.count", "neighbours._pos_sorted", "neighbours._ptype_sorted",
+           "neighbours._hsml_sorted")
 # the neighbour list's own bookkeeping, which that rebuild moves on and which is put back after it
 KEPT_OVER_REBUILD = ("neighbours.stale", "neighbours.builds", "neighbours.overflow")
 
@@ -81,7 +82,7 @@ def restore(solver, state: dict):
     put(arrays)
     # the lists as they were built: from the build positions, in the array order of that build
     nl = solver.neighbours
-    nl.rebuild(wp.clone(nl._x_build), force=True)
+    nl.rebuild(wp.clone(nl.x_build), force=True)
     put(KEPT_OVER_REBUILD)
     for holder, obj in (("solver", solver), ("neighbours", nl)):
         for name, value in state["host"][holder].items():

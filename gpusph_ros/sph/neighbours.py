@@ -9,8 +9,9 @@ device decides by itself (a flag the list kernel reads), so no step waits for th
 
 Periodic axes wrap both the cell search and the separation vector (minimum image).
 
-Where particles differ in smoothing length (refinement zones) the cells are sized by the largest,
-a pair is listed within LIST_SKIN x its own support 2 h_ab (kernels.smoothing), and the lists go
+Where particles differ in smoothing length (refinement levels, levels.py) the cells are sized by
+the largest, a particle lists its own level's particles and a passive one the other levels' active
+fluid too, each pair within LIST_SKIN x its own support 2 h_ab (kernels.smoothing), and the lists go
 stale by the skin of the smallest: a fine particle's list is as long as in a uniform fine run.
 """
 
@@ -37,8 +38,8 @@ def shortest_period(h: float) -> float:
 def default_max_neighbours(dim: int, hdx: float, finest: float = 1.0) -> int:
     """Room for 2.5x the neighbours of a uniform lattice (a wall of finer boundary particles adds
     fewer than the half-support of fluid it replaces). With refinement (``finest`` < 1, levels
-    halving the spacing) the longest list is a coarse particle's among the next level's: its pairs
-    reach 2 x 1.5 h of theirs."""
+    halving the spacing) the longest list is a passive coarse particle's among the next level's
+    active fluid: its pairs reach 2 x 1.5 h of theirs."""
     if finest < 1.0:
         hdx = 1.5 * hdx
     radius = LIST_SKIN * 2.0 * hdx
