@@ -167,3 +167,24 @@ def test_bad_run_setting_is_named(setting, field, allowed):
         resolve(parse_scene(GOOD), sets=[setting])
     assert err.value.field == field
     assert allowed in str(err.value)
+
+
+def test_a_scene_file_changes_its_base_and_records_the_merged_scene(tmp_path):
+    """``base:`` takes another scene and replaces the keys the file gives; the scene's text is the
+    merged scene, so a recording replays without the base file; a loop or a missing base is
+    refused naming ``base``."""
+    lab, zoned = load_scene("dambreak1_lab"), load_scene("dambreak1_lab_zoned")
+    assert zoned.name == "dambreak1_lab_zoned" and zoned.refine and not lab.refine
+    assert (zoned.tank, zoned.fluid, zoned.obstacles, zoned.probes) == (lab.tank, lab.fluid, lab.obstacles, lab.probes)
+    assert parse_scene(yaml.safe_load(zoned.text)).refine == zoned.refine
+    (tmp_path / "base.yaml").write_text(yaml.safe_dump(GOOD))
+    (tmp_path / "deeper.yaml").write_text("base: base.yaml\ndepth: 0.1\n")
+    deeper = load_scene(tmp_path / "deeper.yaml")
+    assert (deeper.name, deeper.depth, deeper.tank) == ("deeper", 0.1, load_scene(tmp_path / "base.yaml").tank)
+    (tmp_path / "a.yaml").write_text("base: b.yaml\n")
+    (tmp_path / "b.yaml").write_text("base: a.yaml\n")
+    (tmp_path / "orphan.yaml").write_text("base: nowhere.yaml\n")
+    for name in ("a.yaml", "orphan.yaml"):
+        with pytest.raises(ConfigError) as err:
+            load_scene(tmp_path / name)
+        assert err.value.field == "base"

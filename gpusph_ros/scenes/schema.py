@@ -9,12 +9,17 @@ Conventions: SI units; the tank is the open-top box [0, tank]; the vertical axis
 (y in 2D, z in 3D) and gravity points down it. Points are written with ``dim`` components.
 Every problem raises ``ConfigError`` naming the field (``fluid[1].hi``), its value and what is
 allowed, so one message tells a user what to change.
+
+A scene file may change another: ``base: dambreak1_lab`` and then only the keys it changes (a
+``refine:`` list, say); its keys replace the base's whole.
 """
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+
+import yaml
 
 from ..share import config_dir
 from ..sph.config import ConfigError, unknown_key
@@ -144,12 +149,33 @@ def read_yaml(sub: str, name_or_path, field_name: str, what: str):
 
 def load_scene(name_or_path) -> Scene:
     """A scene from a built-in name (``builtin_names()``) or a YAML file path."""
-    path, text, data = read_yaml("scenes", name_or_path, "scene", "scene")
-    if not isinstance(data, dict):
-        raise ConfigError("scene", str(path), f"a YAML mapping of scene fields (the file holds {type(data).__name__})")
+    path, text, data = _scene_file(name_or_path, "scene", ())
     scene = parse_scene(data, default_name=path.stem)
     scene.text = text
     return scene
+
+
+def _scene_file(name_or_path, field_name: str, chain: tuple):
+    """(path, text, data) of a scene file. A file with ``base:`` (a built-in scene's name, or a path
+    beside the file) changes that scene: its own keys replace the base's, its name is its own, and
+    its text is the merged scene, so that a recording holds all of it."""
+    path, text, data = read_yaml("scenes", name_or_path, field_name, "scene")
+    if not isinstance(data, dict):
+        raise ConfigError(field_name, str(path),
+                          f"a YAML mapping of scene fields (the file holds {type(data).__name__})")
+    if "base" not in data:
+        return path, text, data
+    base = data["base"]
+    if not isinstance(base, str) or base in chain or len(chain) >= MAX_BASES:
+        raise ConfigError("base", base, f"the name or path of another scene file, in a chain of at most "
+                                        f"{MAX_BASES} files without a loop")
+    if Path(base).suffix and not Path(base).is_absolute():
+        base = str(path.parent / base)
+    _, _, base_data = _scene_file(base, "base", chain + (data["base"],))
+    merged = {**base_data, **{key: value for key, value in data.items() if key != "base"}}
+    merged["name"] = data.get("name", path.stem)
+    text = f"# {path.name}: the scene {data['base']} with this file's keys\n" + yaml.safe_dump(merged, sort_keys=False)
+    return path, text, merged
 
 
 # -- field readers: each names the field it reads ------------------------------------------
@@ -189,6 +215,7 @@ def _mapping(where, value, keys, required=(), whole="scene"):
     return value
 
 
+MAX_BASES = 4  # a scene file on a base on a base ...: more is a loop more likely than a design
 MAX_PATH = 4096  # characters of a path (Linux's PATH_MAX): a longer one is refused before the file system sees it
 MAX_HEADROOM = 10.0  # [tank heights] of air above the tank: more is a domain of nothing
 MAX_RADIUS_DX = 100.0  # [dx] a column probe wider than this averages the tank, not a column
