@@ -76,9 +76,10 @@ def test_rosbags_reads_every_topic_and_the_cloud_is_the_solver_state(recorded):
     assert durability["/sim_node/particles"] == "volatile"
     assert max(stamps) == 30_000_000  # simulated time, ns
     last = clouds[-1]
-    assert [f.name for f in last.fields] == ["x", "y", "z", "vx", "vy", "vz", "density", "pressure", "kind"]
-    assert last.width == run.solver.n and last.point_step == 36
-    values = np.frombuffer(last.data.tobytes(), dtype="<f4").reshape(last.width, 9)
+    assert [f.name for f in last.fields] == ["x", "y", "z", "vx", "vy", "vz", "density", "pressure", "kind",
+                                             "spacing"]
+    assert last.width == run.solver.n and last.point_step == 40
+    values = np.frombuffer(last.data.tobytes(), dtype="<f4").reshape(last.width, 10)
     assert np.array_equal(values[:, 0:3], snap["pos"].astype(np.float32))
     assert np.array_equal(values[:, 3:6], snap["vel"].astype(np.float32))
     assert np.array_equal(values[:, 6], snap["rho"].astype(np.float32))
@@ -87,6 +88,7 @@ def test_rosbags_reads_every_topic_and_the_cloud_is_the_solver_state(recorded):
     parts = run.model.particles
     expected = np.where(parts.ptype == FLUID, 0, np.where(parts.body == 0, 2, 1))
     assert np.array_equal(values[:, 8], expected) and set(np.unique(values[:, 8])) == {0, 1, 2}
+    assert np.all(values[:, 9] == np.float32(run.model.config.dx))  # one level: the scene's spacing
 
 
 def test_a_2d_scene_is_published_z_up(tmp_path):

@@ -9,7 +9,8 @@ particles (sph/levels.py, adaptive particle refinement).
   float64: no level reads another's pairs.
 - A passive particle takes the active level's fields by a first-order interpolation: a linear
   density exactly, a uniform velocity exactly.
-- A still tank with a zone across its surface stays still and hydrostatic on both sides.
+- A still tank with a zone across its surface stays still and hydrostatic on both sides, and its
+  sensors and gauge read it at the spacing of the level where they stand.
 - Particles change level where they stand: a column collapsing into a zone keeps its active mass
   within one coarse particle's, each kind where it belongs, and the front in the zone nearer the
   uniform fine run's than the uniform coarse run's.
@@ -18,6 +19,8 @@ particles (sph/levels.py, adaptive particle refinement).
 import numpy as np
 import pytest
 
+from gpusph_ros.measure.sensors import WallPressure
+from gpusph_ros.measure.suite import Measurements
 from gpusph_ros.scenes import resources
 from gpusph_ros.scenes.build import build
 from gpusph_ros.scenes.schema import parse_scene
@@ -119,11 +122,22 @@ def test_passive_particles_take_the_active_levels_linear_density_and_uniform_vel
 def test_a_still_tank_with_a_zone_across_its_surface_stays_still_and_hydrostatic(zone):
     # dx 2 cm, water 10 spacings deep, to 2 s: measured max |u| 0.68% (middle, fine side) and 0.14%
     # (upper) of sqrt(g H), means 0.18% and 0.02%; the uniform run at dx 1 cm reaches 0.68% too
-    model = build(scene(refine=[zone]), dx=0.02)
+    # and the floor sensors and the gauge read it at the spacing of the level where they stand
+    probes = {"floor_middle": {"type": "pressure_sensor", "position": [0.3, 0.0], "normal": [0, 1], "diameter": 0.04},
+              "floor_side": {"type": "pressure_sensor", "position": [0.1, 0.0], "normal": [0, 1], "diameter": 0.04},
+              "surface": {"type": "gauge", "position": [0.3]}}
+    model = build(scene(refine=[zone], probes=probes), dx=0.02)
     solver = model.solver()
     solver.advance(2.0)
     snap = solver.snapshot()
     cfg, depth = model.config, 0.2
+    in_zone = [zone["lo"][0] <= x <= zone["hi"][0] and zone["lo"][1] <= 0.0 for x in (0.3, 0.1)]
+    wall = WallPressure(solver, [(0.3, 0.0, 0.0), (0.1, 0.0, 0.0)], [(0.0, 1.0, 0.0)] * 2)
+    assert list(wall.spacing) == [0.01 if inside else 0.02 for inside in in_zone]
+    readings = Measurements(solver, model).sample()
+    for name in ("floor_middle", "floor_side"):
+        assert readings["sensors"][name] == pytest.approx(cfg.rho0 * cfg.g_norm * depth, rel=0.03)
+    assert readings["gauges"]["surface"] == pytest.approx(depth, abs=0.01)  # one fine spacing
     fluid = snap["ptype"] == 0
     masses = model.particles.mass.astype(np.float32).astype(np.float64)  # a float32 run's, exactly
     assert np.array_equal(fluid, model.particles.ptype == 0) and snap["mass"][fluid].sum() == masses[fluid].sum()

@@ -265,7 +265,8 @@ def test_a_paused_node_steps_one_output_and_the_cloud_is_the_scene(client):
     assert reply.success and "t = 0.0000 s" in reply.message, reply.message
     cloud = client.wait_for(PARTICLES)[-1]
     assert _t(cloud.header.stamp) == 0.0 and cloud.header.frame_id == "world"
-    assert [f.name for f in cloud.fields] == ["x", "y", "z", "vx", "vy", "vz", "density", "pressure", "kind"]
+    assert [f.name for f in cloud.fields] == ["x", "y", "z", "vx", "vy", "vz", "density", "pressure", "kind",
+                                              "spacing"]
     model = build(load_scene("dambreak1_thesis"), dx=0.06)
     arrays = cloud_arrays(cloud)
     assert cloud.width == len(model.particles)

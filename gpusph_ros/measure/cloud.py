@@ -3,7 +3,9 @@
 One row per particle in scene order (the order the scene built them: fluid first, then boundary;
 the solver keeps its arrays sorted into cells), excluded particles left out, columns x, y, z and
 then the chosen fields. Positions and velocities are turned by the rotation the publisher gives (a
-2D scene's vertical y onto z, ``output.frames``); ``kind`` says what a particle is (fluid, wall, body). One
+2D scene's vertical y onto z, ``output.frames``); ``kind`` says what a particle is (fluid, wall, body),
+``spacing`` its particle spacing [m] (the scene's dx, or a refinement zone's: what a viewer colours
+levels by, and (spacing)^dim its volume). One
 kernel writes the rows into a device buffer, which on a GPU is copied into one reusable host buffer;
 on the CPU the device buffer is the host buffer. No per-particle Python, no float64 round trip: the
 copy off the device is the only pass over the data before serialisation.
@@ -15,7 +17,7 @@ import warp as wp
 
 from ..sph.state import FLUID
 
-FIELDS = ("vx", "vy", "vz", "density", "pressure", "kind")  # what may follow x, y, z
+FIELDS = ("vx", "vy", "vz", "density", "pressure", "kind", "spacing")  # what may follow x, y, z
 FLUID_KIND, WALL_KIND, FIRST_BODY_KIND = 0, 1, 2  # kind: fluid, a fixed wall, then body k as 2 + k
 
 
@@ -34,8 +36,8 @@ def build(scalar):
         return wp.float32(kind)
 
     @wp.func
-    def column(code: int, v: vec, rho: scalar, p: scalar, kind: wp.float32):
-        # codes index FIELDS: 0-2 velocity components, 3 density, 4 pressure, 5 kind
+    def column(code: int, v: vec, rho: scalar, p: scalar, kind: wp.float32, spacing: wp.float64):
+        # codes index FIELDS: 0-2 velocity components, 3 density, 4 pressure, 5 kind, 6 spacing
         value = wp.float32(p)
         if code < 3:
             value = wp.float32(v[code])
@@ -43,13 +45,15 @@ def build(scalar):
             value = wp.float32(rho)
         elif code == 5:
             value = kind
+        elif code == 6:
+            value = wp.float32(spacing)
         return value
 
     @wp.kernel(enable_backward=False, module="unique")
     def pack(ids: wp.array(dtype=wp.int32), pos: wp.array(dtype=vec), vel: wp.array(dtype=vec),
              rho: wp.array(dtype=scalar), pressure: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
-             body: wp.array(dtype=wp.int32), turn: mat, codes: wp.array(dtype=wp.int32),
-             out: wp.array2d(dtype=wp.float32), chunk: int, stride: int):
+             body: wp.array(dtype=wp.int32), hsml: wp.array(dtype=scalar), h: scalar, dx: wp.float64, turn: mat,
+             codes: wp.array(dtype=wp.int32), out: wp.array2d(dtype=wp.float32), chunk: int, stride: int):
         i = wp.tid() * stride + chunk
         row = ids[i]
         # + 0 turns the -0.0 that a turn's negative zero entries make of a 2D scene's z into 0.0
@@ -58,7 +62,9 @@ def build(scalar):
             out[row, a] = wp.float32(x[a])
         v = turn * vel[i]
         for k in range(codes.shape[0]):
-            out[row, 3 + k] = column(codes[k], v, rho[i], pressure[i], kind_of(ptype[i], body[i]))
+            out[row, 3 + k] = column(codes[k], v, rho[i], pressure[i], kind_of(ptype[i], body[i]),
+                                     # the levels' ratio h_i / h is a power of two, exact in any precision
+                                     dx * wp.float64(hsml[i]) / wp.float64(h))
 
     return pack
 
@@ -91,8 +97,8 @@ class CloudPacker:
         s = self.solver
         s.update_pressure()
         # on every core of a CPU (the solver's launcher): a memory-bound scatter of 32 B a particle
-        s.launch(self._pack, s.n, [s.ids, s.pos, s.vel, s.rho, s.pressure, s.ptype, s.body, self._turn, self._codes,
-                                     self._rows])
+        s.launch(self._pack, s.n, [s.ids, s.pos, s.vel, s.rho, s.pressure, s.ptype, s.body, s.hsml,
+                                     s.config.h, s.config.dx, self._turn, self._codes, self._rows])
         if self._host is not self._rows:
             wp.copy(self._host, self._rows)  # into pinned memory: asynchronous until the sync below
         wp.synchronize_device(s.device)

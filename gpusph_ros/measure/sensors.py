@@ -34,7 +34,7 @@ import math
 import numpy as np
 import warp as wp
 
-from ..sph import boundaries
+from ..sph import boundaries, levels
 from .probes import PointProbes
 
 OFFSET_H = 1.5  # [h] the interpolation points' distance in front of the face
@@ -63,10 +63,10 @@ def face_points(position, normal, diameter: float, dx: float, dim: int, tank) ->
     return pts[keep] if keep.any() else c[None, :]
 
 
-def face_pressure(pressure, weight, normal, h: float, rho0: float, gravity) -> np.ndarray:
+def face_pressure(pressure, weight, normal, h, rho0: float, gravity) -> np.ndarray:
     """The pressure on the face at each point, from the ``pressure`` interpolated OFFSET_H h in
-    front of it (and the kernel ``weight`` there, 0 where dry); ``normal``: one for all points, or
-    one per point."""
+    front of it (and the kernel ``weight`` there, 0 where dry); ``normal`` and ``h``: one for all
+    points, or one per point."""
     drop = rho0 * (np.asarray(normal, dtype=np.float64) @ np.asarray(gravity, dtype=np.float64)) * OFFSET_H * h
     return np.where(np.asarray(weight) > 0.0, np.asarray(pressure) - drop, 0.0)  # p_wall = p - rho0 (g.n) delta
 
@@ -74,24 +74,29 @@ def face_pressure(pressure, weight, normal, h: float, rho0: float, gravity) -> n
 class WallPressure:
     """The pressure on wall faces at fixed points (n x 3) with their inward normals (n x 3), in the
     way right for the solver's boundary model (see the module docstring); ``sample()`` returns the
-    pressure at each point, 0 where dry."""
+    pressure at each point, 0 where dry. Each point reads at the spacing and smoothing length of
+    the level that is the flow where it stands (``spacing``: a refinement zone's inside it)."""
 
     def __init__(self, solver, points, normals):
         cfg = solver.config
         self.solver = solver
         self.points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
         self.normals = np.asarray(normals, dtype=np.float64).reshape(-1, 3)
-        self._wall = (cfg.h, cfg.rho0, cfg.gravity)
+        self.spacing = levels.spacing_at(self.points, cfg.zones, cfg.dx)
+        h = cfg.hdx * self.spacing  # as the solver makes its particles' (Solver: hdx x spacing)
+        self._wall = (h, cfg.rho0, cfg.gravity)
         self._kernel = boundaries.model(cfg.boundary).face_pressure(solver.scalar)
         if self._kernel is not None:  # the wall's own pressure is usable
             dev, n = solver.device, len(self.points)
             self._pts = wp.array(self.points, dtype=solver.vec, device=dev)
             self._nrm = wp.array(self.normals, dtype=solver.vec, device=dev)
+            self._spacing = wp.array(self.spacing, dtype=solver.scalar, device=dev)
+            self._h = wp.array(h, dtype=solver.scalar, device=dev)
             self._pressure = wp.zeros(n, dtype=solver.scalar, device=dev)
             self._weight = wp.zeros(n, dtype=solver.scalar, device=dev)
             self._probes = None
         else:
-            self._probes = PointProbes(solver, self.points + OFFSET_H * cfg.h * self.normals)
+            self._probes = PointProbes(solver, self.points + OFFSET_H * h[:, None] * self.normals)
 
     def sample(self) -> np.ndarray:
         if self._probes is not None:
@@ -100,7 +105,7 @@ class WallPressure:
         params, fields, nl = self.solver.measurement_view()
         wp.launch(self._kernel, dim=len(self.points),
                   inputs=[params, nl.grid, nl.cell_start, nl.cell_end, nl.order, fields, self._pts, self._nrm,
-                          self.solver.config.dx, self._pressure, self._weight], device=self.solver.device)
+                          self._spacing, self._h, self._pressure, self._weight], device=self.solver.device)
         return np.where(self._weight.numpy() > 0.0, self._pressure.numpy().astype(np.float64), 0.0)
 
 

@@ -2,9 +2,15 @@
 probes (one interpolation launch for all their points), pressure sensors and the obstacles' faces
 (one wall-pressure launch, sensors.WallPressure), depth-averaged columns, the wrench on each
 obstacle, its pressure-block force and the load of the wall pressure over its faces. Computed on
-the solver's device; only the results come to the host."""
+the solver's device; only the results come to the host.
+
+With refinement zones each measurement samples at the spacing of the finest level where it stands
+(a gauge's line, a sensor's face and a body's faces every fraction of that spacing, a column's
+radius in it, the wall pressure read at its h: sensors.WallPressure); the pressure blocks keep the
+scene's dx, the thesis's definition of them."""
 import numpy as np
 
+from ..sph.levels import finest_in, spacing_at
 from .blocks import PressureBlockForce
 from .columns import ColumnMeans
 from .forces import BodyWrench
@@ -19,6 +25,16 @@ class Measurements:
     def __init__(self, solver, model):
         scene, cfg = model.scene, solver.config
         dim, up = cfg.dim, cfg.dim - 1
+
+        def vertical_line(position):  # (lo, hi) of the tank's vertical line through a horizontal point
+            lo = np.zeros(3)
+            lo[:up] = position[:up]
+            hi = lo.copy()
+            hi[up] = scene.tank[up]
+            return lo, hi
+
+        def line_spacing(position):
+            return finest_in(*vertical_line(position), cfg.zones, cfg.dx)
         self.scene = scene
         points, self._slices = [], {}
         # points on wall and body faces, read by WallPressure: the sensors' and the obstacles' faces
@@ -30,9 +46,10 @@ class Measurements:
                 pts = np.repeat(np.asarray([probe.position]), len(probe.heights), axis=0)
                 pts[:, up] = probe.heights
             elif probe.type == "gauge":
-                pts = gauge_points(probe.position, scene.tank[up], cfg.dx, dim)
+                pts = gauge_points(probe.position, scene.tank[up], line_spacing(probe.position), dim)
             elif probe.type == "pressure_sensor":
-                pts = face_points(probe.position, probe.normal, probe.diameter, cfg.dx, dim, scene.tank)
+                spacing = spacing_at(probe.position, cfg.zones, cfg.dx)[0]
+                pts = face_points(probe.position, probe.normal, probe.diameter, spacing, dim, scene.tank)
                 self._sensors[probe.name] = (len(wall), len(wall) + len(pts))
                 wall.extend(pts)
                 wall_normals.extend([probe.normal] * len(pts))
@@ -48,7 +65,8 @@ class Measurements:
             centre = np.asarray(obstacle.centre(dim))
             self._wrenches[obstacle.name] = BodyWrench(solver, model.bodies[obstacle.name], centre)
             self._blocks[obstacle.name] = PressureBlockForce(solver, obstacle.lo, obstacle.hi, obstacle.block_offsets)
-            pts, normals, areas = face_load_points(obstacle.lo, obstacle.hi, cfg.dx, dim, scene.tank)
+            spacing = finest_in(obstacle.lo, obstacle.hi, cfg.zones, cfg.dx)
+            pts, normals, areas = face_load_points(obstacle.lo, obstacle.hi, spacing, dim, scene.tank)
             self._faces[obstacle.name] = (len(wall), pts, normals, areas, centre)
             wall.extend(pts)
             wall_normals.extend(normals)
@@ -56,8 +74,8 @@ class Measurements:
         self._wall = WallPressure(solver, wall, wall_normals) if wall else None
         columns = [p for p in scene.probes if p.type == "column"]
         self._column_names = [p.name for p in columns]
-        self._columns = (ColumnMeans(solver, [p.position for p in columns], [p.radius_dx * cfg.dx for p in columns])
-                         if columns else None)
+        self._columns = (ColumnMeans(solver, [p.position for p in columns],
+                                     [p.radius_dx * line_spacing(p.position) for p in columns]) if columns else None)
 
     def sample(self) -> dict:
         """{"points": {name: {vel, pressure, rho}}, "profiles": {name: {heights, vel}},

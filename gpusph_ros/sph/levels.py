@@ -49,6 +49,27 @@ def band_width(spacing: float, hdx: float) -> float:
     return 2.0 * hdx * spacing + 0.5 * spacing
 
 
+def spacing_at(points, zones, dx: float) -> np.ndarray:
+    """The particle spacing where each point (n x 3) stands: that of the finest zone
+    (SolverConfig.zones: lo, hi, spacing) holding it, else the scene's dx. A measurement reads there
+    at the level that is the flow."""
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    out = np.full(len(pts), float(dx))
+    for lo, hi, spacing in zones or ():
+        inside = np.all((pts >= np.asarray(lo)) & (pts <= np.asarray(hi)), axis=1)
+        out[inside] = np.minimum(out[inside], spacing)
+    return out
+
+
+def finest_in(lo, hi, zones, dx: float) -> float:
+    """The finest spacing in the box [lo, hi] (3-vectors): the finest zone overlapping it, else dx;
+    what a measurement tiling the box (a body's faces, a gauge's line) samples at."""
+    lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
+    overlapping = [spacing for z_lo, z_hi, spacing in zones or ()
+                   if np.all(lo <= np.asarray(z_hi)) and np.all(hi >= np.asarray(z_lo))]
+    return float(min([dx, *overlapping]))
+
+
 def sub_offsets(k: int, dim: int) -> np.ndarray:
     """The k^dim daughters' offsets from their parent's centre in units of its spacing."""
     c = (np.arange(k) + 0.5) / k - 0.5
