@@ -6,14 +6,27 @@ and the number of steps to the end time follows from the mean time step of those
 flow that speeds up takes shorter steps (the CFL condition on c0 + |u|, the force condition), so
 the estimate is a lower bound (measured: 551 for 562 steps of the 2D collapse to 0.1 s at 5 mm,
 518 for 593 of DamBreak 1 to 0.5 s at 5 cm).
+
+With refinement zones the calibration prices the zones' particles as they stand at rest; fluid that
+flows into a zone later makes fine particles there, so the estimate is a lower bound again. A
+scene with zones is priced without them too; one without them, with a proposed zone at half the
+spacing around each obstacle and probe (``proposed_zones``), printed as the ``refine:`` to paste.
 """
 import dataclasses
 import time
 
+import numpy as np
 import warp as wp
+import yaml
 
 from .scenes import reduce
 from .scenes.build import build_run
+from .scenes.schema import parse_scene
+from .sph import ConfigError
+
+# a proposed zone reaches this many of the scene's dx past an obstacle or a probe: more than a
+# coarse kernel support (2 h = 2.6 dx), so that the flow arriving there is fine before it does
+ZONE_MARGIN_DX = 4.0
 
 
 def plan(scene, run_config, calibration_steps: int = 30) -> dict:
@@ -43,14 +56,58 @@ def plan(scene, run_config, calibration_steps: int = 30) -> dict:
 
 def plan_reductions(scene, run_config, calibration_steps: int = 30) -> tuple:
     """(plans, not_applicable): the plan of the run as configured, then of the run under each
-    reduction of ``reduce.applicable`` that it does not already use; and why the others do not apply."""
+    reduction of ``reduce.applicable`` that it does not already use, then with and without zones
+    (``zone_option``); and why the others do not apply."""
     cfg = build_run(scene, run_config).config
     options = reduce.applicable(scene, run_config.output.end_time, cfg.dx)
     plans = [plan(scene, run_config, calibration_steps)]
     for label, reduction in options["apply"].items():
         if label != run_config.reduction.label:
             plans.append(plan(scene, dataclasses.replace(run_config, reduction=reduction), calibration_steps))
-    return plans, options["not applicable"]
+    not_applicable = dict(options["not applicable"])
+    label, other = zone_option(scene, cfg.dx)
+    try:
+        plans.append({**plan(other, run_config, calibration_steps), "model": label, "refine": other.refine})
+    except (ConfigError, ValueError) as err:  # a proposal the run's numerics cannot refine
+        not_applicable[label] = str(err)
+    return plans, not_applicable
+
+
+def zone_option(scene, dx: float) -> tuple:
+    """(label, scene): a scene with zones without them; one without, with ``proposed_zones``."""
+    data = yaml.safe_load(scene.text) if scene.text else None
+    if data is None:
+        raise ValueError(f"scene {scene.name}: no scene text to change")
+    if scene.refine:
+        data["refine"] = []
+        return "no zones", parse_scene(data, default_name=scene.name)
+    data["refine"] = proposed_zones(scene, dx)
+    return "zones (proposed)", parse_scene(data, default_name=scene.name)
+
+
+def proposed_zones(scene, dx: float) -> list:
+    """``refine:`` items: a zone at half the spacing ZONE_MARGIN_DX dx around each obstacle and
+    each probe, from the floor (or a point probe's or sensor's height less that reach) to that reach
+    above the scene's depth or the probe's point, whichever is lower, and a dx below the tank's top:
+    no fine air above the water, where the slots reserved for a zone would go unused. Where the accuracy comes from
+    (docs/variable_resolution.md): resolution at the body and over the bed in front of it."""
+    dim, up = scene.dim, scene.dim - 1
+    margin = round(ZONE_MARGIN_DX * dx, 6)
+    tank = np.asarray(scene.tank[:dim])
+
+    def box(name, lo, hi, top):
+        lo, hi = np.asarray(lo[:dim], dtype=np.float64) - margin, np.asarray(hi[:dim], dtype=np.float64) + margin
+        hi[up] = min(min(top, scene.depth) + margin, tank[up] - dx)  # below the top: a zone reaching a
+        # tank face is open beyond it (refine.zone_bounds), and the headroom's air would be fine
+        return {"name": name, "lo": [round(float(v), 6) for v in np.clip(lo, 0.0, tank)],
+                "hi": [round(float(v), 6) for v in np.clip(hi, 0.0, tank)], "ratio": 0.5}
+
+    zones = [box(f"near_{o.name}", o.lo, o.hi, o.hi[up]) for o in scene.obstacles]
+    for probe in scene.probes:
+        line = probe.type in ("profile", "gauge", "column")
+        zones.append(box(f"near_{probe.name}", probe.position, probe.position,
+                         scene.depth if line else probe.position[up]))
+    return zones
 
 
 def table(plans: list, not_applicable: dict) -> str:
@@ -64,8 +121,21 @@ def table(plans: list, not_applicable: dict) -> str:
                      f"{p['device_bytes'] / 1e6:>10.1f} {p['steps_per_s']:>9.1f} {p['steps']:>9,} "
                      f"{p['wall_s'] / 60:>9.2f} {share:>6.1%}")
     lines += [f"{p['model']:<18} {validity(p)}" for p in plans if p["valid_until"]]
+    lines += [f"{p['model']:<18} refine: " + yaml.safe_dump(_zone_items(p["refine"]), default_flow_style=True,
+                                                             sort_keys=False, width=10_000).strip()
+              for p in plans if p.get("refine")]
     lines += [f"{label:<18} not applicable: {why}" for label, why in not_applicable.items()]
     return "\n".join(lines)
+
+
+def _zone_items(zones) -> list:
+    """Zones as the ``refine:`` items a scene file takes."""
+    out = []
+    for z in zones:
+        item = {"name": z.name, "around": z.around, "margin": z.margin} if z.around else \
+            {"name": z.name, "lo": list(z.lo), "hi": list(z.hi)}
+        out.append({**item, "ratio": z.ratio})
+    return out
 
 
 def validity(p: dict) -> str:

@@ -3,7 +3,7 @@ holds, and the step estimate from a calibration at rest is a lower bound close t
 import numpy as np
 import pytest
 
-from gpusph_ros.plan import plan, text
+from gpusph_ros.plan import plan, plan_reductions, table, text, zone_option
 from gpusph_ros.scenes.build import build
 from gpusph_ros.scenes.schema import load_scene
 from gpusph_ros.scenes.settings import resolve
@@ -40,3 +40,22 @@ def test_the_step_estimate_is_a_close_lower_bound(collapse):
     assert p["steps"] <= solver.steps <= 1.3 * p["steps"], (p["steps"], solver.steps)
     assert np.isfinite(p["wall_s"]) and p["wall_s"] > 0
     assert "about" in text(p) and "675" in text(p)
+
+
+def test_a_scene_is_priced_with_and_without_zones():
+    """Without zones, a zone at half the spacing is proposed 4 dx around each obstacle and probe,
+    below the tank's top; with zones, the scene is priced without them."""
+    lab = load_scene("dambreak1_lab")
+    label, zoned = zone_option(lab, 0.03)
+    assert label == "zones (proposed)" and [z.name for z in zoned.refine] == ["near_obstruction", "near_velocity",
+                                                                               "near_D"]
+    near = zoned.refine[0]  # the obstruction 0.90-1.02 x 0.24-0.36, 0.4 m tall, in water 0.3 m deep
+    assert near.lo == pytest.approx((0.78, 0.12, 0.0)) and near.hi == pytest.approx((1.14, 0.48, 0.37))
+    label, plain = zone_option(load_scene("dambreak1_lab_zoned"), 0.03)
+    assert label == "no zones" and plain.refine == [] and plain.obstacles == lab.obstacles
+    stoker = load_scene("stoker_2d")
+    config = resolve(stoker, dx=0.02, end_time=0.1)
+    plans, _ = plan_reductions(stoker, config, calibration_steps=2)
+    proposed = [p for p in plans if p["model"] == "zones (proposed)"]
+    assert len(proposed) == 1 and proposed[0]["particles"] > plans[0]["particles"]
+    assert "zones (proposed)   refine: [{name: near_" in table(plans, {})
