@@ -39,8 +39,9 @@ def test_lists_match_brute_force(precision):
 
 def test_two_levels_lists_match_brute_force():
     """Cells one fine list radius wide: a coarse particle searches two each way and still finds its
-    whole list. An active particle lists its own level only; a passive one the other level's active
-    fluid too (and its own level's, for when it turns active before the next build). Each pair is
+    whole list. An active particle lists its own level only; a passive one its donors too, the other
+    level's active fluid and the finer level's passive fluid (and its own level's, for when it turns
+    active before the next build). Each pair is
     within the list radius of h_ab = (h_a + h_b) / 2."""
     rng = np.random.default_rng(11)
     dx = 0.01
@@ -64,7 +65,8 @@ def test_two_levels_lists_match_brute_force():
     dist = np.linalg.norm(sep, axis=2)
     radius = NeighbourList.SKIN * (h[:, None] + h[None, :])
     same = h[:, None] == h[None, :]
-    allowed = same | ((ptype[:, None] == PASSIVE) & (ptype[None, :] == FLUID))
+    donor = (ptype[None, :] == FLUID) | ((ptype[None, :] == PASSIVE) & (h[None, :] < h[:, None]))
+    allowed = same | ((ptype[:, None] == PASSIVE) & donor)
     np.fill_diagonal(allowed, False)
     for i in range(n):
         expected = set(np.flatnonzero(allowed[i] & (dist[i] < radius[i] * (1 - 1e-9))))

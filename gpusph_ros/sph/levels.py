@@ -90,27 +90,6 @@ def build(scalar):
     S = state.build(scalar)
     Params, Fields = S.Params, S.Fields
 
-    @wp.kernel(enable_backward=False, module="unique")
-    def passive_state(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32),
-                      f: Fields, chunk: int, stride: int):
-        """Each passive particle's density (first order, within the fluid's bounds) and velocity
-        (Shepard) from the active fluid of the other levels in its list; unchanged where none is
-        near."""
-        i = wp.tid() * stride + chunk
-        if f.ptype[i] != PASSIVE:
-            return
-        h_i = f.hsml[i]
-        x = f.pos[i]
-        a, rhs, u = no_sums()
-        base = i * grid.max_neighbours
-        for k in range(count[i]):
-            j = nbr[base + k]
-            if f.ptype[j] == FLUID and not same_level(p, h_i, f.hsml[j]):
-                a, rhs, u = corrected_term(p, grid, f, x, h_i, j, a, rhs, u)
-        if a[0, 0] > scalar(0.0):
-            f.rho[i] = wp.clamp(corrected_density(p, a, rhs, h_i), p.rho_min, p.rho_max)
-            f.vel[i] = u / a[0, 0]
-
     @wp.func
     def box_distance(p: Params, x: vec, lo: vec, hi: vec) -> scalar:
         """The distance from x to the box [lo, hi] over the run's axes (0 inside it)."""
@@ -145,6 +124,37 @@ def build(scalar):
             elif wp.abs(h_k - h_i) < scalar(0.001) * h_i:
                 own = wp.min(own, d)
         return finer, own, child
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def passive_state(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32),
+                      f: Fields, zone_lo: wp.array(dtype=vec), zone_hi: wp.array(dtype=vec),
+                      zone_h: wp.array(dtype=scalar), level_h: scalar, chunk: int, stride: int):
+        """Each passive particle of the level of smoothing length ``level_h``: its density (first
+        order, within the fluid's bounds) and velocity (Shepard) from its donors in its list, the
+        neighbouring levels' active fluid and the next finer level's passive fluid that stands in a
+        zone finer still (the solver runs the levels finest first, so those have their values);
+        unchanged where none is near. So a coarse particle two levels above the active fluid reads
+        it through the level between, each interpolation across one level, within the support of
+        h_ab = 1.5 h of the finer."""
+        i = wp.tid() * stride + chunk
+        h_i = f.hsml[i]
+        if f.ptype[i] != PASSIVE or wp.abs(h_i - level_h) > scalar(0.01) * level_h:
+            return
+        x = f.pos[i]
+        a, rhs, u = no_sums()
+        base = i * grid.max_neighbours
+        for k in range(count[i]):
+            j = nbr[base + k]
+            h_j = f.hsml[j]
+            donor = f.ptype[j] == FLUID and not same_level(p, h_i, h_j)
+            if f.ptype[j] == PASSIVE and h_j < h_i * scalar(0.999):
+                finer, own, child = place(p, f.pos[j], h_j, zone_lo, zone_hi, zone_h)
+                donor = finer == 1
+            if donor:
+                a, rhs, u = corrected_term(p, grid, f, x, h_i, j, a, rhs, u)
+        if a[0, 0] > scalar(0.0):
+            f.rho[i] = wp.clamp(corrected_density(p, a, rhs, h_i), p.rho_min, p.rho_max)
+            f.vel[i] = u / a[0, 0]
 
     @wp.kernel(enable_backward=False, module="unique")
     def mark_spawned(p: Params, pos: wp.array(dtype=vec), hsml: wp.array(dtype=scalar),

@@ -122,6 +122,13 @@ def grid(scalar):
         return side * side * (2 * grid.reach_z + 1)
 
     @wp.func
+    def adjacent_levels(h_a: scalar, h_b: scalar) -> bool:
+        """Whether smoothing lengths h_a and h_b are of neighbouring refinement levels (one twice the
+        other): a passive particle's donors (levels.passive_state)."""
+        tol = scalar(0.01) * wp.max(h_a, h_b)
+        return wp.abs(h_a - scalar(2.0) * h_b) < tol or wp.abs(h_b - scalar(2.0) * h_a) < tol
+
+    @wp.func
     def cell_around(grid: Grid, ci: wp.vec3i, k: int) -> int:
         """The k-th of the cells_around cell ci (flat index), or -1 off the grid."""
         side = 2 * grid.reach + 1
@@ -129,7 +136,7 @@ def grid(scalar):
                               k / (side * side) - grid.reach_z)
 
     return SimpleNamespace(Grid=Grid, separation=separation, cell_coord=cell_coord, neighbour_cell=neighbour_cell,
-                           cells_around=cells_around, cell_around=cell_around)
+                           cells_around=cells_around, cell_around=cell_around, adjacent_levels=adjacent_levels)
 
 
 @functools.lru_cache(maxsize=None)
@@ -139,6 +146,7 @@ def build(scalar):
     vec = wp.types.vector(3, scalar)
     G = grid(scalar)
     Grid, separation, cell_coord, neighbour_cell = G.Grid, G.separation, G.cell_coord, G.neighbour_cell
+    adjacent_levels = G.adjacent_levels
 
     @wp.kernel(enable_backward=False, module="unique")
     def cell_keys(grid: Grid, pos: wp.array(dtype=vec), ptype: wp.array(dtype=wp.int32),
@@ -239,15 +247,19 @@ def build(scalar):
                             # a boundary particle needs only its fluid neighbours (active or
                             # passive); an excluded particle is nobody's neighbour; with levels
                             # a particle needs its own level's (a passive one too: it may turn
-                            # active before the next build), a passive one the active fluid of
-                            # the others too (levels.py)
+                            # active before the next build), a passive one its donors too: the
+                            # neighbouring levels' active fluid and the next finer level's passive
+                            # fluid (levels.passive_state)
                             t_k = ptype_sorted[k]
                             listed = k != ki and (carries_fluid(t_k) or (fluid_i and t_k == BOUNDARY))
                             radius2 = grid.radius2
                             if listed and grid.variable != 0:
-                                if hsml_sorted[ki] != hsml_sorted[k] and not (passive_i and t_k == FLUID):
-                                    listed = False
-                                h_ab = scalar(0.5) * (hsml_sorted[ki] + hsml_sorted[k])
+                                h_i = hsml_sorted[ki]
+                                h_k = hsml_sorted[k]
+                                if h_i != h_k:
+                                    listed = passive_i and adjacent_levels(h_i, h_k) \
+                                        and (t_k == FLUID or (t_k == PASSIVE and h_k < h_i))
+                                h_ab = scalar(0.5) * (h_i + h_k)
                                 radius2 = radius2 * h_ab * h_ab * grid.inv_h2
                             if listed:
                                 r = separation(grid, xi, pos_sorted[k])

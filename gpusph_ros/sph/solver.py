@@ -176,7 +176,10 @@ class Solver:
     def _forces(self, f):
         n, p, nl, k = self.n, self.params, self.neighbours, self._passes
         if self.config.zones:
-            self.launch(levels.build(self.scalar).passive_state, n, [p, nl.grid, nl.nbr, nl.count, f])
+            # finest first: a coarser level's passive particles read the next finer level's
+            for h in np.unique(self._h_particles):
+                self.launch(levels.build(self.scalar).passive_state, n, [p, nl.grid, nl.nbr, nl.count, f, self._zone_lo,
+                                                                         self._zone_hi, self._zone_h, float(h)])
         wp.launch(k.equation_of_state, dim=n, inputs=[p, f], device=self.device)
         if self.config.viscosity == "sps":
             self.launch(k.sps_strain, n, [p, nl.grid, nl.nbr, nl.count, f])
