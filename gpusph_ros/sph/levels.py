@@ -147,7 +147,8 @@ def build(scalar):
             j = nbr[base + k]
             h_j = f.hsml[j]
             donor = f.ptype[j] == FLUID and not same_level(p, h_i, h_j)
-            if f.ptype[j] == PASSIVE and h_j < h_i * scalar(0.999):
+            if f.ptype[j] == PASSIVE and h_j < h_i * scalar(0.999) and h_j > p.h_min * scalar(1.001):
+                # (the finest level has no zone finer still)
                 finer, own, child = place(p, f.pos[j], h_j, zone_lo, zone_hi, zone_h)
                 donor = finer == 1
             if donor:

@@ -55,6 +55,7 @@ class Solver:
             raise ValueError(f"particles: spacings above 0 and at most dx = {cfg.dx:g} m (a refinement zone is "
                              f"finer than the scene), got {spacing.min():g} to {spacing.max():g} m")
         self._h_particles = cfg.hdx * spacing
+        self._level_h = [float(h) for h in np.unique(self._h_particles)]  # the levels' h, finest first
         self.params = self._make_params()
         self.launch = Launcher(self.device, cfg.cpu_threads)
         self._allocate(particles)
@@ -177,9 +178,9 @@ class Solver:
         n, p, nl, k = self.n, self.params, self.neighbours, self._passes
         if self.config.zones:
             # finest first: a coarser level's passive particles read the next finer level's
-            for h in np.unique(self._h_particles):
+            for h in self._level_h:
                 self.launch(levels.build(self.scalar).passive_state, n, [p, nl.grid, nl.nbr, nl.count, f, self._zone_lo,
-                                                                         self._zone_hi, self._zone_h, float(h)])
+                                                                         self._zone_hi, self._zone_h, h])
         wp.launch(k.equation_of_state, dim=n, inputs=[p, f], device=self.device)
         if self.config.viscosity == "sps":
             self.launch(k.sps_strain, n, [p, nl.grid, nl.nbr, nl.count, f])
