@@ -91,7 +91,6 @@ class WallPressure:
             self._pts = wp.array(self.points, dtype=solver.vec, device=dev)
             self._nrm = wp.array(self.normals, dtype=solver.vec, device=dev)
             self._spacing = wp.array(self.spacing, dtype=solver.scalar, device=dev)
-            self._h = wp.array(h, dtype=solver.scalar, device=dev)
             self._pressure = wp.zeros(n, dtype=solver.scalar, device=dev)
             self._weight = wp.zeros(n, dtype=solver.scalar, device=dev)
             self._probes = None
@@ -105,7 +104,7 @@ class WallPressure:
         params, fields, nl = self.solver.measurement_view()
         wp.launch(self._kernel, dim=len(self.points),
                   inputs=[params, nl.grid, nl.cell_start, nl.cell_end, nl.order, fields, self._pts, self._nrm,
-                          self._spacing, self._h, self._pressure, self._weight], device=self.solver.device)
+                          self._spacing, self._pressure, self._weight], device=self.solver.device)
         return np.where(self._weight.numpy() > 0.0, self._pressure.numpy().astype(np.float64), 0.0)
 
 

@@ -11,7 +11,8 @@ Their own level reads them as fluid; they have no rates of their own. Before eac
 passive particle takes the density and velocity of the level that is active where it stands, by
 the first-order corrected interpolation of interpolate.py over that level's active particles
 (Chiron et al. 2018, Section 3: the passive particles' fields interpolated from the other level),
-and it moves with that velocity.
+and it moves with that velocity. Two levels or more above the active fluid it reads the passive
+particles of the level between (``passive_state``).
 
 Particles change level where they stand, after every committed step (``relevel``): a particle
 inside a finer zone is passive; a zone's own particle is active in its zone, passive within its

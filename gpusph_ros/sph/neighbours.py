@@ -13,9 +13,10 @@ Where particles differ in smoothing length (refinement levels, levels.py) the ce
 the smallest and a particle searches as many cells each way as its own list radius needs (a passive
 one, the largest's): sized by the largest, a fine particle tested 8x the candidates of a uniform
 fine run in 3D, and the list builds took as long as the uniform fine run's. A particle lists its own
-level's particles and a passive one the other levels' active fluid too, each pair within LIST_SKIN
-x its own support 2 h_ab (kernels.smoothing), and the lists go stale by the skin of the smallest: a
-fine particle's list is as long as in a uniform fine run.
+level's particles and a passive one its donors too (the neighbouring levels' active fluid and the
+next finer level's passive fluid: levels.passive_state), each pair within LIST_SKIN x its own
+support 2 h_ab (kernels.smoothing), and the lists go stale by the skin of the smallest: a fine
+particle's list is as long as in a uniform fine run.
 """
 
 import functools

@@ -183,16 +183,16 @@ def build(scalar):
     @wp.kernel(enable_backward=False, module="unique")
     def face_pressure(p: Params, grid: Grid, start: wp.array(dtype=wp.int32), end: wp.array(dtype=wp.int32),
                       order: wp.array(dtype=wp.int32), f: Fields, points: wp.array(dtype=vec),
-                      normals: wp.array(dtype=vec), spacing: wp.array(dtype=scalar), h_point: wp.array(dtype=scalar),
-                      pressure: wp.array(dtype=scalar), weight: wp.array(dtype=scalar)):
+                      normals: wp.array(dtype=vec), spacing: wp.array(dtype=scalar), pressure: wp.array(dtype=scalar),
+                      weight: wp.array(dtype=scalar)):
         """The pressure on a wall face at each point (inward normal n): the ghost node's pressure, one
         spacing in front of the face, cloned to the face as mDBC clones it to its boundary particles;
-        0, with weight 0, where no fluid is near. Each point reads at its own spacing and smoothing
-        length (the level that is the flow where it stands: levels.spacing_at).
+        0, with weight 0, where no fluid is near. Each point reads at its own spacing (the level that is
+        the flow where it stands: levels.spacing_at).
         A measurement: the fluid is found through the cell grid (``order`` maps its slots)."""
         k = wp.tid()
         off = spacing[k] * normals[k]
-        h_g = h_point[k]
+        h_g = p.h * spacing[k] / p.dx  # a point reads at its own spacing
         xg = points[k] + off
         a, rhs, u = no_sums()
         ci = cell_coord(grid, xg)
