@@ -1,7 +1,7 @@
 """A solver's state taken and put back (sph/checkpoint.py): a solver restored from a state taken at
 0.1 s and stepped to 0.2 s ends bit for bit where the solver it was taken from ends, for each kind of
-wall, viscosity and precision, in 2D and 3D; the neighbour lists, rebuilt rather than stored, come
-back pair for pair; with a refinement zone too, across the steps where particles change level."""
+wall, viscosity and precision, in 2D and 3D; the neighbour lists, of which only the used entries are
+stored, come back pair for pair; with a refinement zone too, across the steps where particles change level."""
 import numpy as np
 import pytest
 
@@ -28,7 +28,7 @@ def test_a_restored_solver_steps_as_the_one_it_was_taken_from(scene, dx, setting
     first = model.solver()
     first.advance(0.1)
     state = checkpoint.capture(first)
-    assert "neighbours.nbr" not in state["arrays"]  # rebuilt, not stored
+    assert "neighbours.nbr" not in state["arrays"]  # only its used entries are
     second = model.solver()
     checkpoint.restore(second, state)
     count = first.neighbours.count.numpy()

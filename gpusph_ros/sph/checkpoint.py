@@ -4,10 +4,13 @@ resumed steps exactly as one that was never stopped (bit for bit on the CPU).
 Everything the solver holds between two steps is taken: every device array it and its neighbour
 list own (the particles in their cell order, the half-step and candidate states, the rates, the
 lists' build positions and cell ranges, the clock, the health census and the exclusions), the
-arrays its Fields structs point to, and its plain host values (time, step, counts). The neighbour
-lists themselves are rebuilt on restore from the build positions (the same pairs in the same
-order), and what is fixed by the configuration (Params, kernels, the launcher) is built again from
-the same configuration.
+arrays its Fields structs point to, and its plain host values (time, step, counts). Of the
+neighbour lists only each list's used entries are kept (a fifth of the array), and the sorted
+copies every step makes again are not. What is fixed by the configuration (Params, kernels, the
+launcher) is built again from the same configuration.
+
+The lists are stored, not rebuilt from their build positions: particles change level between two
+builds (levels.py) and a list built again after that would differ from the one the run holds.
 """
 import numpy as np
 import warp as wp
@@ -47,18 +50,23 @@ def device_arrays(solver) -> dict:
     return out
 
 
-# rebuilt on restore instead of stored (four fifths of a checkpoint): the lists and the sorted copies
-# they were built from, which a rebuild from the stored build positions gives again, pair for pair
-REBUILT = ("neighbours.nbr", "neighbours.count", "neighbours._pos_sorted", "neighbours._ptype_sorted",
-           "neighbours._hsml_sorted")
-# the neighbour list's own bookkeeping, which that rebuild moves on and which is put back after it
-KEPT_OVER_REBUILD = ("neighbours.stale", "neighbours.builds", "neighbours.overflow")
+# not stored: the sorted copies every step's cell sort makes again before a pass reads them, and the
+# lists, whose used entries are stored packed (LISTS) instead of the whole fixed-width array
+NOT_STORED = ("neighbours.nbr", "neighbours._pos_sorted", "neighbours._ptype_sorted", "neighbours._hsml_sorted")
+LISTS = "neighbours.nbr_used"
+
+
+def _used(nl, count) -> np.ndarray:
+    """Which entries of the fixed-width lists (n x max_neighbours) hold a neighbour."""
+    return np.arange(nl.max_neighbours)[None, :] < np.asarray(count)[:, None]
 
 
 def capture(solver) -> dict:
     """The solver's state: {"arrays": {path: numpy copy}, "host": {holder: {name: value}}}."""
     wp.synchronize_device(solver.device)
-    arrays = {path: a.numpy().copy() for path, a in device_arrays(solver).items() if path not in REBUILT}
+    arrays = {path: a.numpy().copy() for path, a in device_arrays(solver).items() if path not in NOT_STORED}
+    nl = solver.neighbours
+    arrays[LISTS] = nl.nbr.numpy().reshape(nl.n, nl.max_neighbours)[_used(nl, arrays["neighbours.count"])]
     host = {holder: {name: value for name, value in vars(obj).items() if _plain(value)}
             for holder, obj in (("solver", solver), ("neighbours", solver.neighbours))}
     return {"arrays": arrays, "host": host}
@@ -67,10 +75,10 @@ def capture(solver) -> dict:
 def restore(solver, state: dict):
     """Put ``state`` (``capture`` of a solver of the same configuration and particle count) into
     ``solver``; ValueError naming what does not match."""
-    arrays = {path: a for path, a in device_arrays(solver).items() if path not in REBUILT}
-    if set(arrays) != set(state["arrays"]):
+    arrays = {path: a for path, a in device_arrays(solver).items() if path not in NOT_STORED}
+    if set(arrays) | {LISTS} != set(state["arrays"]):
         raise ValueError("checkpoint: its arrays are not this solver's: " +
-                         ", ".join(sorted(set(arrays) ^ set(state["arrays"]))))
+                         ", ".join(sorted((set(arrays) | {LISTS}) ^ set(state["arrays"]))))
 
     def put(paths):
         for path in paths:
@@ -80,10 +88,10 @@ def restore(solver, state: dict):
             wp.copy(target, wp.array(data, dtype=target.dtype, device=target.device))
 
     put(arrays)
-    # the lists as they were built: from the build positions, in the array order of that build
     nl = solver.neighbours
-    nl.rebuild(wp.clone(nl.x_build), force=True)
-    put(KEPT_OVER_REBUILD)
+    lists = nl.nbr.numpy().reshape(nl.n, nl.max_neighbours)
+    lists[_used(nl, state["arrays"]["neighbours.count"])] = state["arrays"][LISTS]
+    nl.nbr.assign(lists.ravel())
     for holder, obj in (("solver", solver), ("neighbours", nl)):
         for name, value in state["host"][holder].items():
             setattr(obj, name, value)
