@@ -3,7 +3,6 @@ import numpy as np
 import pytest
 
 from gpusph_ros.sph import Particles, Solver, SolverConfig
-from gpusph_ros.sph.neighbours import NeighbourList
 from gpusph_ros.sph.state import FLUID, PASSIVE
 
 pytestmark = pytest.mark.unit
@@ -24,7 +23,7 @@ def test_lists_match_brute_force(precision):
     nl = solver.neighbours
     count = nl.count.numpy()
     nbr = nl.nbr.numpy().reshape(n, nl.max_neighbours)
-    radius = NeighbourList.SKIN * 2.0 * cfg.h
+    radius = nl.skin * 2.0 * cfg.h
     sep = pos[:, None, :] - pos[None, :, :]
     sep[..., 0] -= 0.1 * np.round(sep[..., 0] / 0.1)
     dist = np.linalg.norm(sep, axis=2)
@@ -63,7 +62,7 @@ def test_two_levels_lists_match_brute_force():
     sep = pos[:, None, :] - pos[None, :, :]
     sep[..., 0] -= 0.12 * np.round(sep[..., 0] / 0.12)
     dist = np.linalg.norm(sep, axis=2)
-    radius = NeighbourList.SKIN * (h[:, None] + h[None, :])
+    radius = nl.skin * (h[:, None] + h[None, :])
     same = h[:, None] == h[None, :]
     donor = (ptype[None, :] == FLUID) | ((ptype[None, :] == PASSIVE) & (h[None, :] < h[:, None]))
     allowed = same | ((ptype[:, None] == PASSIVE) & donor)

@@ -6,7 +6,7 @@ particles (sph/levels.py, adaptive particle refinement).
   fine walls) one fine kernel support wide lies outside the zone. The active mass is exact, the
   active fine fluid is the uniform fine lattice, densities are on the hydrostatic profile.
 - A zone over the whole tank runs as the uniform run at the zone's spacing, to round-off in
-  float64: no level reads another's pairs.
+  float64: no level reads another's pairs (every level at one step: multirate off).
 - A passive particle takes the active level's fields by a first-order interpolation: a linear
   density exactly, a uniform velocity exactly.
 - A still tank with a zone across its surface stays still and hydrostatic on both sides, and its
@@ -15,6 +15,8 @@ particles (sph/levels.py, adaptive particle refinement).
 - Particles change level where they stand: a column collapsing into a zone keeps its active mass
   within one coarse particle's, each kind where it belongs, and the front in the zone nearer the
   uniform fine run's than the uniform coarse run's.
+- Multirate (the coarse level at twice the fine level's step) launches half the steps and gives
+  the collapse the front of every level at the fine step, and lands on the asked time.
 - A zone that cannot be built is refused naming the field.
 """
 import numpy as np
@@ -84,7 +86,8 @@ def test_a_zone_over_the_whole_tank_runs_as_the_uniform_run_at_its_spacing(bound
     column = {**TANK, "fluid": [{"name": "water", "lo": [0.0, 0.0], "hi": [0.2, 0.2]}]}
     whole = {"name": "all", "lo": [0.0, 0.0], "hi": [0.6, 0.32], "ratio": 0.5}
     uniform = build(parse_scene(column), dx=0.01, boundary=boundary, precision="float64")
-    zoned = build(parse_scene({**column, "refine": [whole]}), dx=0.02, boundary=boundary, precision="float64")
+    zoned = build(parse_scene({**column, "refine": [whole]}), dx=0.02, boundary=boundary, precision="float64",
+                  multirate=False)
     runs = []
     for model in (uniform, zoned):
         solver = model.solver()
@@ -202,17 +205,21 @@ DOWNSTREAM = {"name": "downstream", "lo": [0.2, 0.0], "hi": [0.6, 0.32], "ratio"
 def test_a_column_collapsing_into_a_zone_changes_level_there():
     # the surge from a coarse column (dx 2 cm) runs into a 0.5 zone from x = 0.2 m; measured fronts
     # minus the uniform 1 cm run's at 0.25 / 0.3 / 0.35 s: -0.39 / -0.52 / -0.10 a (zoned), -0.56 /
-    # -0.83 / -0.60 a (uniform 2 cm); the active mass within 0.9% of the column's
+    # -0.83 / -0.60 a (uniform 2 cm); the active mass within 0.9% of the column's. Multirate (the
+    # default) against every level at the fine step: fronts 0.001 / 0.002 / 0.009 a apart
     a, times = 0.12, (0.25, 0.3, 0.35)
     fronts = {}
-    for name, sc, dx in (("fine", parse_scene(COLUMN), 0.01), ("coarse", parse_scene(COLUMN), 0.02),
-                         ("zoned", parse_scene({**COLUMN, "refine": [DOWNSTREAM]}), 0.02)):
-        model = build(sc, dx=dx)
+    zoned = parse_scene({**COLUMN, "refine": [DOWNSTREAM]})
+    for name, sc, dx, multirate in (("fine", parse_scene(COLUMN), 0.01, True),
+                                    ("coarse", parse_scene(COLUMN), 0.02, True), ("zoned", zoned, 0.02, True),
+                                    ("one_rate", zoned, 0.02, False)):
+        model = build(sc, dx=dx, multirate=multirate)
         solver = model.solver()
         mass = model.particles.mass[model.particles.ptype == 0].sum()
         fronts[name] = []
         for t in times:
             solver.advance(t)
+            assert solver.time == pytest.approx(t, abs=1e-12)
             snap = solver.snapshot()
             active = snap["ptype"] == 0
             fronts[name].append(snap["pos"][active, 0].max())
@@ -230,9 +237,10 @@ def test_a_column_collapsing_into_a_zone_changes_level_there():
                 assert np.all(x[passive & fine] >= 0.2 - 2 * model.config.h / 2 - 0.005 - 0.02) and \
                     np.all(x[passive & fine] < 0.2)
         assert np.isfinite(fronts[name]).all()
-    fine, coarse, zoned = (np.array(fronts[k]) for k in ("fine", "coarse", "zoned"))
+    fine, coarse, zoned, one_rate = (np.array(fronts[k]) for k in ("fine", "coarse", "zoned", "one_rate"))
     assert np.all(np.abs(zoned - fine) < np.abs(coarse - fine)) and np.all(zoned > 0.2)
     assert np.abs(zoned - fine).max() < 0.6 * a
+    assert np.abs(zoned - one_rate).max() < 0.05 * a
 
 
 @pytest.mark.unit

@@ -52,7 +52,8 @@ def device_bytes(n: int, cfg: SolverConfig, refined: bool = False) -> int:
     scalar = 8 if cfg.precision == "float64" else 4
     finest = 0.5 if refined else 1.0
     integers = _INTEGER_BYTES + (_LEVEL_BYTES if refined else 0)
-    return n * (4 * default_max_neighbours(cfg.dim, cfg.hdx, finest) + _SCALARS * scalar + integers)
+    substeps = 2 if refined and cfg.multirate else 1
+    return n * (4 * default_max_neighbours(cfg.dim, cfg.hdx, finest, substeps) + _SCALARS * scalar + integers)
 
 
 def host_free_bytes() -> int:

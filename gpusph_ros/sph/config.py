@@ -182,7 +182,10 @@ class Numerics:
     c0_coef: float = setting(10.0, "c0 / sqrt(g H) when c0 is 0")
     cfl: float = setting(0.4, "Courant number of the adaptive time step (Monaghan 1992, as GPUSPH); docs/defaults.md: "
                               "0.2-0.4 give the same answers on the impact cases", lo=MIN_CFL, hi=1.0, node=True)
-    dt_fixed: float = setting(0.0, "> 0 forces this time step [s] (tests, stability studies)")
+    dt_fixed: float = setting(0.0, "> 0 forces this time step [s] (tests, stability studies); with multirate, "
+                                   "the finest level's")
+    multirate: bool = setting(True, "refinement zones: the coarser levels step at twice the finest level's step "
+                                    "(sph/levels.py); off: every level at the finest's")
     # a tank started at rest reaches its discrete equilibrium without bouncing on its walls
     settle_tau: float = setting(0.0, "settling: velocities relax with this time constant [s] until settle_until")
     settle_until: float = setting(0.0, "settling ends at this time [s]")
@@ -307,7 +310,7 @@ class SolverConfig(Numerics, HealthLimits, Domain):
         if not 0.0 < self.rho_min_ratio < 1.0 < self.rho_max_ratio:
             raise ConfigError("rho_min_ratio/rho_max_ratio", (self.rho_min_ratio, self.rho_max_ratio),
                               "0 < rho_min_ratio < 1 < rho_max_ratio")
-        shortest = neighbours.shortest_period(self.h)
+        shortest = neighbours.shortest_period(self.h, 2 if self.zones and self.multirate else 1)
         for axis, periodic in enumerate(self.periodic):
             if periodic and (self.domain_hi[axis] - self.domain_lo[axis]) < shortest:
                 raise ConfigError("periodic", self.periodic,

@@ -204,7 +204,7 @@ def build(scalar):
         if not healthy(fail):
             return
         if excluded_mass[FIRST_TIME] < wp.float64(0.0):
-            excluded_mass[FIRST_TIME] = clock[T] + clock[DT]
+            excluded_mass[FIRST_TIME] = clock[T] + wp.float64(p.coarse_stride) * clock[DT]  # the step's end
         excluded_mass[MASS] = excluded_mass[MASS] + pending_mass[0]
         pending_mass[0] = wp.float64(0.0)
         for k in range(N_REASONS):

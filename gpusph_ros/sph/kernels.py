@@ -53,7 +53,12 @@ def params(cfg, h_min: "float | None" = None) -> dict:
     h_min = cfg.h if h_min is None else h_min
     return {"kernel": KERNEL_ID[cfg.kernel], "norm": normalisation(cfg.kernel, cfg.dim, cfg.h), "h": cfg.h,
             "inv_h": 1.0 / cfg.h, "eta2": 0.01 * cfg.h ** 2, "norm_unit": _NORM[(cfg.kernel, cfg.dim)],
-            "variable_h": int(h_min < cfg.h * (1.0 - 1.0e-9)), "h_min": min(h_min, cfg.h)}
+            "variable_h": int(h_min < cfg.h * (1.0 - 1.0e-9)), "h_min": min(h_min, cfg.h),
+            "coarse_stride": 2 if cfg.multirate and h_min < cfg.h * (1.0 - 1.0e-9) else 1}
+
+
+# which particles a pass of a multi-rate step takes (``selected``)
+EVERY_LEVEL, FINEST_LEVEL, COARSER_LEVELS = 0, 1, 2
 
 
 @functools.lru_cache(maxsize=None)
@@ -130,6 +135,22 @@ def build(scalar):
         return p.variable_h == 0 or h_a == h_b
 
     @wp.func
+    def stride(p: Params, h_a: scalar) -> int:
+        """How many of the finest level's steps one step of a particle of smoothing length h_a spans:
+        1 on the finest level, ``coarse_stride`` (2 with multirate, else 1) on every coarser one."""
+        if p.coarse_stride == 1 or h_a < p.h_min * scalar(1.001):
+            return 1
+        return p.coarse_stride
+
+    @wp.func
+    def selected(p: Params, h_a: scalar, levels: int) -> bool:
+        """Whether a pass over ``levels`` (EVERY_LEVEL, FINEST_LEVEL, COARSER_LEVELS) takes a
+        particle of smoothing length h_a."""
+        if levels == EVERY_LEVEL:
+            return True
+        return (levels == FINEST_LEVEL) == (h_a < p.h_min * scalar(1.001))
+
+    @wp.func
     def own_scale(p: Params, h_a: scalar) -> scalar:
         """h_a / the scene's h: what a length set in dx (a cap, a threshold) is scaled by for a
         refined particle; exactly 1 when every particle has the scene's h."""
@@ -145,7 +166,7 @@ def build(scalar):
         dw_out[i] = grad_factor(kernel, norm, inv_h, r[i]) * r[i]
 
     return SimpleNamespace(shape=shape, shape_dq=shape_dq, w=w, grad_factor=grad_factor, smoothing=smoothing,
-                           same_level=same_level, own_scale=own_scale,
+                           same_level=same_level, own_scale=own_scale, stride=stride, selected=selected,
                            evaluate=evaluate)
 
 

@@ -3,9 +3,10 @@
 later pass of the step loops over that list only. (Half-width cells searched two each way test
 40% fewer candidates but visit 125 cells instead of 27, and measured slower on a CPU.)
 
-The lists reach LIST_SKIN x the kernel support and are Verlet lists: they are rebuilt only once
-some particle has moved more than a safe fraction of the skin since the last build, which the
-device decides by itself (a flag the list kernel reads), so no step waits for the host.
+The lists reach list_skin x the kernel support and are Verlet lists: they are rebuilt only once
+some particle, where the next step's force passes will read it, would be more than half the skin
+from where it was at the last build, which the device decides by itself (a flag the list kernel
+reads), so no step waits for the host.
 
 Periodic axes wrap both the cell search and the separation vector (minimum image).
 
@@ -14,7 +15,7 @@ the smallest and a particle searches as many cells each way as its own list radi
 one, the largest's): sized by the largest, a fine particle tested 8x the candidates of a uniform
 fine run in 3D, and the list builds took as long as the uniform fine run's. A particle lists its own
 level's particles and a passive one its donors too (the neighbouring levels' active fluid and the
-next finer level's passive fluid: levels.passive_state), each pair within LIST_SKIN x its own
+next finer level's passive fluid: levels.passive_state), each pair within list_skin x its own
 support 2 h_ab (kernels.smoothing), and the lists go stale by the skin of the smallest: a fine
 particle's list is as long as in a uniform fine run.
 """
@@ -26,27 +27,40 @@ from types import SimpleNamespace
 import numpy as np
 import warp as wp
 
-from .state import BOUNDARY, FLUID, PASSIVE, VACANT, carries_fluid
+from .state import BOUNDARY, DT, FLUID, PASSIVE, VACANT, carries_fluid
 
 # lists reach LIST_SKIN kernel supports; a list stays valid until some particle has moved half the
 # difference since it was built (a Verlet list)
 LIST_SKIN = 1.1
+# how far ahead of its committed position a particle's next step reads it, in |u| dt: the half step
+# (1/2) and, where a launched step spans two of the finest level's (multirate), 3/2; with room for
+# the step growing, the acceleration, XSPH and shifting
+LOOKAHEAD_SAFETY = 1.5
 
 
-def shortest_period(h: float) -> float:
+def list_skin(substeps: int = 1) -> float:
+    """The list radius over the kernel support where one launched step spans ``substeps`` steps
+    of the finest level (2 with multirate): LIST_SKIN's skin for each. Measured on DamBreak 1's
+    zoned run after the impact: multirate's lists, read over two steps, were rebuilt at every
+    launch with a skin of 0.1 and at one in 2.7 with 0.2 (12 s against 13.5 s for 0.1 s); the
+    uniform run is faster with 0.1 (28.6 s against 31.5 s)."""
+    return 1.0 + (LIST_SKIN - 1.0) * substeps
+
+
+def shortest_period(h: float, substeps: int = 1) -> float:
     """The shortest periodic axis for smoothing length h: the cell search wraps one cell (a list
-    radius, LIST_SKIN x 2h) each way, so a period must hold three whole cells."""
-    return 3 * LIST_SKIN * 2.0 * h
+    radius, list_skin x 2h) each way, so a period must hold three whole cells."""
+    return 3 * list_skin(substeps) * 2.0 * h
 
 
-def default_max_neighbours(dim: int, hdx: float, finest: float = 1.0) -> int:
+def default_max_neighbours(dim: int, hdx: float, finest: float = 1.0, substeps: int = 1) -> int:
     """Room for 2.5x the neighbours of a uniform lattice (a wall of finer boundary particles adds
     fewer than the half-support of fluid it replaces). With refinement (``finest`` < 1, levels
     halving the spacing) the longest list is a passive coarse particle's among the next level's
     active fluid: its pairs reach 2 x 1.5 h of theirs."""
     if finest < 1.0:
         hdx = 1.5 * hdx
-    radius = LIST_SKIN * 2.0 * hdx
+    radius = list_skin(substeps) * 2.0 * hdx
     expected = (4.0 / 3.0 * math.pi * radius ** 3) if dim == 3 else (math.pi * radius ** 2)
     return int(8 * math.ceil(2.5 * expected / 8))
 
@@ -75,7 +89,8 @@ def grid(scalar):
         variable: int  # 1: a pair's radius is radius2 x (h_ab / h)^2 (refinement zones)
         inv_h2: scalar  # 1 / h^2 of the largest h
         inv_h_min: scalar  # 1 / the smallest h, whose list radius the cells are wide
-        move2: scalar  # squared displacement after which the lists are stale
+        half_skin: scalar  # how far a particle may be from its build position where a pass reads it
+        lookahead: scalar  # how far ahead of its committed position the next step reads it, in |u| dt
         max_neighbours: int
 
     @wp.func
@@ -183,12 +198,16 @@ def build(scalar):
         hsml_sorted[k] = hsml[i]
 
     @wp.kernel(enable_backward=False, module="unique")
-    def check_displacement(grid: Grid, pos: wp.array(dtype=vec), x_build: wp.array(dtype=vec),
+    def check_displacement(grid: Grid, pos: wp.array(dtype=vec), vel: wp.array(dtype=vec),
+                           x_build: wp.array(dtype=vec), clock: wp.array(dtype=wp.float64),
                            stale: wp.array(dtype=wp.int32)):
-        """Flag the lists stale once a particle has moved past the safe part of the skin."""
+        """Flag the lists stale once a particle, where the next step will read it (``lookahead``
+        |u| dt on), would be past half the skin from its build position: two particles closing in
+        then still find each other listed."""
         i = wp.tid()
         d = separation(grid, pos[i], x_build[i])
-        if wp.dot(d, d) > grid.move2:
+        ahead = wp.length(d) + grid.lookahead * wp.length(vel[i]) * scalar(clock[DT])
+        if ahead > grid.half_skin:
             stale[0] = 1
 
     @wp.kernel(enable_backward=False, module="unique")
@@ -285,15 +304,14 @@ def build(scalar):
 class NeighbourList:
     """Owns the cell grid and the per-particle neighbour lists of one solver on one device."""
 
-    SKIN = LIST_SKIN
-
     def __init__(self, scalar, dim: int, support: float, lo, hi, periodic, ptype: wp.array,
                  needs_list: wp.array, ghost: wp.array, max_neighbours: int, launcher, hsml: wp.array,
-                 variable: bool = False):
+                 variable: bool = False, substeps: int = 1):
         """``ptype``, ``needs_list`` and ``ghost`` (each particle's ghost-node offset, see
         neighbour_list) are the solver's own device arrays (it may reorder them); ``hsml``, each
         particle's smoothing length, which a pair's radius follows where ``variable`` (they differ:
-        ``support`` is then the largest's)."""
+        ``support`` is then the largest's); ``substeps``, the finest level's steps one launched
+        step spans (2 with multirate), whose force passes all read these lists."""
         self._passes = build(scalar)
         Grid = self._passes.Grid
         n = needs_list.shape[0]
@@ -303,9 +321,10 @@ class NeighbourList:
         self.max_neighbours = max_neighbours
         lo = np.asarray(lo, dtype=np.float64)
         length = np.asarray(hi, dtype=np.float64) - lo
-        radius = self.SKIN * support
+        self.skin = list_skin(substeps)
+        radius = self.skin * support
         h_min = float(hsml.numpy().min()) if variable else 0.5 * support
-        cell = self.SKIN * 2.0 * h_min  # see the module docstring
+        cell = self.skin * 2.0 * h_min  # see the module docstring
         reach = int(math.ceil(radius / cell - 1.0e-4))  # cells searched each way by the largest h
         dims = [max(1, int(math.floor(length[ax] / cell))) for ax in range(3)]
         if dim == 2:
@@ -323,10 +342,9 @@ class NeighbourList:
         g.variable = int(variable)
         g.inv_h2 = (2.0 / support) ** 2
         g.inv_h_min = 1.0 / h_min
-        # two particles closing in each move at most half the skin; keep a 20% margin for the
-        # half-step positions the second force pass uses
-        move = 0.8 * 0.5 * (radius - support) * 2.0 * h_min / support
-        g.move2 = move * move
+        # two particles closing in each move at most half the skin (the finest level's)
+        g.half_skin = 0.5 * (radius - support) * 2.0 * h_min / support
+        g.lookahead = LOOKAHEAD_SAFETY * (substeps - 0.5)
         g.max_neighbours = max_neighbours
         self.grid = g
         ncells = dims[0] * dims[1] * dims[2]
@@ -353,10 +371,11 @@ class NeighbourList:
         """Each particle's position when the lists were last built (a particle made since sets its own)."""
         return self._x_build
 
-    def moved(self, pos: wp.array):
-        """Note the particles' new positions: the lists go stale if any moved too far."""
-        wp.launch(self._passes.check_displacement, dim=self.n, inputs=[self.grid, pos, self._x_build, self.stale],
-                  device=self.device)
+    def moved(self, pos: wp.array, vel: wp.array, clock: wp.array):
+        """Note the particles' new positions and velocities (``clock``: the solver's, whose DT is
+        the last step): the lists go stale if the next step would read any too far away."""
+        wp.launch(self._passes.check_displacement, dim=self.n,
+                  inputs=[self.grid, pos, vel, self._x_build, clock, self.stale], device=self.device)
 
     def sort(self, pos: wp.array) -> wp.array:
         """Sort the particles by cell; returns the particle index of each sorted position."""

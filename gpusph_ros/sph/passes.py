@@ -53,6 +53,7 @@ def _force_passes(scalar):
     Params, Fields = S.Params, S.Fields
     K = kernels.build(scalar)
     kernel_w, grad_factor, smoothing, own_scale, same_level = K.w, K.grad_factor, K.smoothing, K.own_scale, K.same_level
+    stride, selected = K.stride, K.selected
     eos_pressure = eos.build(scalar).pressure
     pressure_gradient = momentum.build(scalar).pressure_gradient
     V = viscosity.build(scalar)
@@ -129,9 +130,11 @@ def _force_passes(scalar):
 
     @wp.kernel(enable_backward=False, module="unique")
     def sps_strain(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32),
-                   f: Fields, chunk: int, stride: int):
-        i = wp.tid() * stride + chunk
+                   f: Fields, levels: int, chunk: int, threads: int):
+        i = wp.tid() * threads + chunk
         zero = vec(scalar(0.0))
+        if not selected(p, f.hsml[i], levels):
+            return
         if f.ptype[i] != FLUID:
             f.tau_diag[i] = zero
             f.tau_off[i] = zero
@@ -158,8 +161,13 @@ def _force_passes(scalar):
                  plane_point: wp.array(dtype=vec), plane_normal: wp.array(dtype=vec),
                  acc: wp.array(dtype=vec), drho: wp.array(dtype=scalar), xsph: wp.array(dtype=vec),
                  shift: wp.array(dtype=vec), maxima: wp.array(dtype=scalar), clumped: wp.array(dtype=wp.int32),
-                 chunk: int, stride: int):
-        i = wp.tid() * stride + chunk
+                 levels: int, chunk: int, threads: int):
+        """The rates of every particle of ``levels`` (kernels.selected): a fluid particle's
+        acceleration, density rate, XSPH velocity and shifting from its pairs; a boundary particle's
+        density rate and, on a body, the reaction it takes. The others keep the rates they have."""
+        i = wp.tid() * threads + chunk
+        if not selected(p, f.hsml[i], levels):
+            return
         xi = f.pos[i]
         base = i * grid.max_neighbours
         a = vec(scalar(0.0))
@@ -203,10 +211,13 @@ def _force_passes(scalar):
                     a += plane_corners(p.kernel, norm_i, inv_h_i, p.dim, xi, plane_point, plane_normal, p.n_planes,
                                        p_i, rho_i)
             if p.variable_h != 0:
-                # choose_dt reads the scene's h: a particle of h_i = s h limits the step as one of the
-                # scene's h with |a| / s and mu + c0 (1/s - 1) / h would (Monaghan 1992's bounds)
-                track_max(maxima, 2 * chunk, wp.length(a) / scale_i)
-                track_max(maxima, 2 * chunk + 1, mu_max + p.c0 * (scalar(1.0) / scale_i - scalar(1.0)) * p.inv_h)
+                # choose_dt reads the scene's h and sets the finest level's step: a particle of
+                # h_i = s h stepping m of those at once limits it as one of the scene's h with
+                # m^2 |a| / s and m mu + c0 (m / s - 1) / h would (Monaghan 1992's bounds
+                # sqrt(h_i / |a|) and h_i / (c0 + h_i mu), over m)
+                m = scalar(stride(p, f.hsml[i]))
+                track_max(maxima, 2 * chunk, m * m * wp.length(a) / scale_i)
+                track_max(maxima, 2 * chunk + 1, m * mu_max + p.c0 * (m / scale_i - scalar(1.0)) * p.inv_h)
             else:
                 track_max(maxima, 2 * chunk, wp.length(a))
                 track_max(maxima, 2 * chunk + 1, mu_max)
@@ -280,7 +291,8 @@ def _time_passes(scalar):
     Params = state.build(scalar).Params
     healthy = health.build(scalar).healthy
     capped = shifting.build(scalar).capped
-    own_scale = kernels.build(scalar).own_scale
+    K = kernels.build(scalar)
+    own_scale, stride, selected = K.own_scale, K.stride, K.selected
 
     @wp.kernel(enable_backward=False, module="unique")
     def choose_dt(p: Params, t_target: wp.float64, maxima: wp.array(dtype=scalar), fail: wp.array(dtype=wp.int32),
@@ -288,6 +300,8 @@ def _time_passes(scalar):
         """dt = CFL min(sqrt(h/|a|max), h/(c0 + h max|mu|), 0.125 h^2/nu) (Monaghan 1992; GPUSPH).
 
         Time is float64 whatever the precision: a float32 clock cannot land on an output time.
+        With multirate the step launched spans ``coarse_stride`` steps dt of the finest level
+        (interact scales the coarser levels' bounds), and lands on t_target with all of them.
         """
         a_max = scalar(0.0)
         mu_max = scalar(0.0)
@@ -305,7 +319,7 @@ def _time_passes(scalar):
                 h_min = wp.float64(p.h_min)  # the finest particles bound the viscous step
                 dt = wp.min(dt, cfl * wp.float64(0.125) * h_min * h_min / wp.float64(p.nu))
         clock[DT_STABLE] = dt  # the step the stability limits allow, before landing on t_target
-        remaining = t_target - clock[T]
+        remaining = (t_target - clock[T]) / wp.float64(p.coarse_stride)
         if remaining <= wp.float64(1.0e-12) * wp.max(wp.float64(1.0), clock[T]):
             dt = wp.float64(0.0)
         elif dt > remaining:
@@ -320,16 +334,19 @@ def _time_passes(scalar):
                   hsml: wp.array(dtype=scalar), vel_rate: wp.array(dtype=vec), acc: wp.array(dtype=vec),
                   drho: wp.array(dtype=scalar),
                   xsph: wp.array(dtype=vec), shift: wp.array(dtype=vec), pos_out: wp.array(dtype=vec),
-                  vel_out: wp.array(dtype=vec), rho_out: wp.array(dtype=scalar)):
+                  vel_out: wp.array(dtype=vec), rho_out: wp.array(dtype=scalar), levels: int):
         """x_out = x + f dt (u_rate + xsph) [+ the shift f dt s, capped], u_out = u + f dt a,
-        rho_out = rho + f dt drho.
+        rho_out = rho + f dt drho, for the particles of ``levels`` (kernels.selected), dt each one's
+        own step (kernels.stride finest-level steps).
 
         f = 1/2 with the rates at n (predictor), f = 1 with the rates at n + 1/2 (corrector).
         Boundary particles keep position and velocity; dynamic ones update density. A passive
         particle (no rates) moves with the velocity its level's interpolation gave it (levels.py).
         """
         i = wp.tid()
-        dt = factor * scalar(clock[DT])
+        if not selected(p, hsml[i], levels):
+            return
+        dt = factor * scalar(clock[DT]) * scalar(stride(p, hsml[i]))
         rho_out[i] = rho[i] + dt * drho[i]
         if not carries_fluid(ptype[i]):
             pos_out[i] = pos[i]
@@ -395,15 +412,18 @@ def _time_passes(scalar):
         spawned_o[k] = spawned[i]
 
     @wp.kernel(enable_backward=False, module="unique")
-    def tick(fail: wp.array(dtype=wp.int32), clock: wp.array(dtype=wp.float64), steps: wp.array(dtype=wp.int32)):
-        """Advance time and step count, or record when the first failing step would have ended."""
+    def tick(p: Params, fail: wp.array(dtype=wp.int32), clock: wp.array(dtype=wp.float64),
+             steps: wp.array(dtype=wp.int32)):
+        """Advance time and step count (the finest level's steps), or record when the first failing
+        step would have ended."""
+        m = p.coarse_stride
         if healthy(fail):
             if clock[DT] > wp.float64(0.0):
-                clock[T] = clock[T] + clock[DT]
-                steps[STEP] = steps[STEP] + 1
+                clock[T] = clock[T] + wp.float64(m) * clock[DT]
+                steps[STEP] = steps[STEP] + m
         elif steps[FAILED_STEP] < 0:
-            steps[FAILED_STEP] = steps[STEP] + 1
-            clock[T_FAILED] = clock[T] + clock[DT]
+            steps[FAILED_STEP] = steps[STEP] + m
+            clock[T_FAILED] = clock[T] + wp.float64(m) * clock[DT]
 
     return SimpleNamespace(choose_dt=choose_dt, integrate=integrate, commit=commit, permute=permute, tick=tick)
 

@@ -14,6 +14,7 @@ import warp as wp
 from . import boundaries, density, eos, health, kernels, levels, passes, shifting, viscosity, xsph
 from .config import RESET_FIELDS, SolverConfig, check_device
 from .health import HealthError
+from .kernels import COARSER_LEVELS, EVERY_LEVEL, FINEST_LEVEL
 from .launch import Launcher
 from .neighbours import NeighbourList, NeighbourOverflow, default_max_neighbours
 from .particles import Particles
@@ -61,8 +62,10 @@ class Solver:
         self._allocate(particles)
         self.neighbours = NeighbourList(self.scalar, cfg.dim, 2.0 * cfg.h, cfg.domain_lo, cfg.domain_hi,
                                         cfg.periodic, self.ptype, self._needs_list, self.ghost,
-                                        max_neighbours or default_max_neighbours(cfg.dim, cfg.hdx, self.finest),
-                                        self.launch, self.hsml, self.params.variable_h != 0)
+                                        max_neighbours or default_max_neighbours(cfg.dim, cfg.hdx, self.finest,
+                                                                                  self.params.coarse_stride),
+                                        self.launch, self.hsml, self.params.variable_h != 0,
+                                        self.params.coarse_stride)
         self._launched = 0
         self.time, self.dt, self.dt_stable, self.steps = 0.0, 0.0, 0.0, 0
         self._excluded_host = (np.zeros(health.N_REASONS, dtype=np.int32), np.array([0.0, -1.0]))
@@ -130,6 +133,7 @@ class Solver:
                       tau_off=wp.zeros(n, dtype=v, device=dev))
         self.fields = self._make_fields(self.pos, self.vel, self.rho, shared)
         self._fields_h = self._make_fields(self._pos_h, self._vel_h, self._rho_h, shared)
+        self._half, self._candidate = (self._pos_h, self._vel_h, self._rho_h), (self._pos_c, self._vel_c, self._rho_c)
         planes = cfg.planes or []
         pts = [p.point for p in planes] or [(0.0, 0.0, 0.0)]
         nrm = [np.asarray(p.normal, dtype=np.float64) / np.linalg.norm(p.normal) for p in planes] or [(0.0, 0.0, 1.0)]
@@ -177,18 +181,26 @@ class Solver:
         return f
 
     # -- stepping -----------------------------------------------------------------------
-    def _forces(self, f):
+    def _forces(self, f, which: int = EVERY_LEVEL):
+        """The rates of the particles of the levels ``which`` (kernels.selected) in the state ``f``."""
         n, p, nl, k = self.n, self.params, self.neighbours, self._passes
         if self.config.zones:
             # finest first: a coarser level's passive particles read the next finer level's
-            for h in self._level_h:
+            for h in self._level_h[:1] if which == FINEST_LEVEL else self._level_h:
                 self.launch(levels.build(self.scalar).passive_state, n, [p, nl.grid, nl.nbr, nl.count, f, self._zone_lo,
                                                                          self._zone_hi, self._zone_h, h])
         wp.launch(k.equation_of_state, dim=n, inputs=[p, f], device=self.device)
         if self.config.viscosity == "sps":
-            self.launch(k.sps_strain, n, [p, nl.grid, nl.nbr, nl.count, f])
+            self.launch(k.sps_strain, n, [p, nl.grid, nl.nbr, nl.count, f, which])
         self.launch(k.interact, n, [p, nl.grid, nl.nbr, nl.count, f, self._plane_pt, self._plane_n, self.acc,
-                                    self._drho, self._xsph, self._shift, self._maxima, self._clumped])
+                                    self._drho, self._xsph, self._shift, self._maxima, self._clumped, which])
+
+    def _integrate(self, factor: float, base, vel_rate, out, which: int = EVERY_LEVEL):
+        """out = base advanced by ``factor`` of each selected particle's own step (passes.integrate)
+        with the rates of the last force pass; base and out are (pos, vel, rho) triples."""
+        wp.launch(self._passes.integrate, dim=self.n,
+                  inputs=[self.params, self._clock, factor, *base, self.ptype, self.hsml, vel_rate, self.acc,
+                          self._drho, self._xsph, self._shift, *out, which], device=self.device)
 
     def _reorder(self):
         state = [self.pos, self.vel, self.rho, self.mass, self.hsml, self.ptype, self.body, self.ids,
@@ -208,14 +220,13 @@ class Solver:
         self.boundary.before_forces(self)
         self._forces(self.fields)
         wp.launch(k.choose_dt, dim=1, inputs=[p, t_target, self._maxima, self._fail, self._clock], device=dev)
-        wp.launch(k.integrate, dim=n,
-                  inputs=[p, self._clock, 0.5, self.pos, self.vel, self.rho, self.ptype, self.hsml, self.vel, self.acc,
-                          self._drho, self._xsph, self._shift, self._pos_h, self._vel_h, self._rho_h], device=dev)
-        self._forces(self._fields_h)
-        wp.launch(k.integrate, dim=n,
-                  inputs=[p, self._clock, 1.0, self.pos, self.vel, self.rho, self.ptype, self.hsml, self._vel_h,
-                          self.acc, self._drho, self._xsph, self._shift, self._pos_c, self._vel_c, self._rho_c],
-                  device=dev)
+        state, half, candidate = (self.pos, self.vel, self.rho), self._half, self._candidate
+        if p.coarse_stride == 1:
+            self._integrate(0.5, state, self.vel, half)
+            self._forces(self._fields_h)
+            self._integrate(1.0, state, self._vel_h, candidate)
+        else:
+            self._two_rates(state, half, candidate)
         wp.launch(k.check_particles, dim=n,
                   inputs=[p, self.pos, self._pos_c, self._vel_c, self._rho_c, self.mass, self.hsml, self.ptype,
                           self.ids, self.solid_lo, self.solid_hi, self._fail, self._faulty, self._pending,
@@ -238,12 +249,39 @@ class Solver:
                   device=dev)
         if self.config.zones:
             self._relevel()
-        wp.launch(k.tick, dim=1, inputs=[self._fail, self._clock, self._steps], device=dev)
-        self.neighbours.moved(self.pos)
+        wp.launch(k.tick, dim=1, inputs=[p, self._fail, self._clock, self._steps], device=dev)
+        self.neighbours.moved(self.pos, self.vel, self._clock)
         self._launched += 1
-        every = self.config.shepard_every
-        if every and self._launched % every == 0:
+        every, m = self.config.shepard_every, self.params.coarse_stride
+        if every and self._launched * m // every > (self._launched - 1) * m // every:  # every `every` fine steps
             self.shepard_filter(rebuild=False)
+
+    def _two_rates(self, state, half, candidate):
+        """One step of the coarser levels, 2 dt, as two of the finest level, dt each, every level by
+        the predictor-corrector (multirate; Params.coarse_stride). The rates at the step's start are
+        in. The coarse levels' midpoint is the finest level's first end, where every level is
+        evaluated; between, the finest level's passive particles read the coarse fluid on the path
+        its predictor and then its corrector take (to round-off what a linear interpolation in time
+        between the coarse states would give):
+
+            t + dt/2: fine half step, coarse at x + dt/2 (rates at t)       -> fine rates
+            t + dt:   fine state, coarse predictor x + dt (rates at t)     -> every level's rates
+            t + 3dt/2: fine half step, coarse at x + 3dt/2 (midpoint rates) -> fine rates
+            t + 2dt:  both levels' candidates
+        """
+        self._integrate(0.5, state, self.vel, half, FINEST_LEVEL)
+        self._integrate(0.25, state, self.vel, half, COARSER_LEVELS)
+        self._forces(self._fields_h, FINEST_LEVEL)
+        self._integrate(1.0, state, self._vel_h, candidate, FINEST_LEVEL)  # the fine state at t + dt
+        for dst, src in zip(half, candidate):
+            wp.copy(dst, src)
+        self._integrate(0.5, state, self.vel, half, COARSER_LEVELS)
+        self._forces(self._fields_h)
+        self._integrate(1.0, state, self._vel_h, candidate, COARSER_LEVELS)
+        self._integrate(0.75, state, self._vel_h, half, COARSER_LEVELS)
+        self._integrate(0.5, candidate, self._vel_c, half, FINEST_LEVEL)
+        self._forces(self._fields_h, FINEST_LEVEL)
+        self._integrate(1.0, candidate, self._vel_h, candidate, FINEST_LEVEL)
 
     def _relevel(self):
         """Each fluid particle's level kind from where it stands, and daughters for the fluid that
@@ -374,7 +412,8 @@ class Solver:
         while not self.reached(t_target):
             batch = 1
             if self.dt_stable > 0.0:
-                batch = int(min(_MAX_BATCH, max(1, 0.9 * (t_target - self.time) / self.dt_stable)))
+                span = self.params.coarse_stride * self.dt_stable  # what one launched step covers
+                batch = int(min(_MAX_BATCH, max(1, 0.9 * (t_target - self.time) / span)))
             before = self.time
             for _ in range(batch):
                 if interrupt is not None and interrupt():

@@ -88,6 +88,7 @@ def build(scalar):
         penetration: scalar  # penetration_ratio dx
         n_solids: int
         n_zones: int  # refinement zones (levels.py): where each level's particles are active
+        coarse_stride: int  # finest-level steps per step of the coarser levels: 2 with multirate, else 1
         clump_r: scalar  # clump_ratio dx
         clump_wall: scalar  # health.CLUMP_WALL_DX dx: no clumping counted closer to a wall
         clump_fraction: wp.float64
