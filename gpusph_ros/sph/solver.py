@@ -133,6 +133,7 @@ class Solver:
                       tau_off=wp.zeros(n, dtype=v, device=dev))
         self.fields = self._make_fields(self.pos, self.vel, self.rho, shared)
         self._fields_h = self._make_fields(self._pos_h, self._vel_h, self._rho_h, shared)
+        self._fields_c = self._make_fields(self._pos_c, self._vel_c, self._rho_c, shared)
         self._half, self._candidate = (self._pos_h, self._vel_h, self._rho_h), (self._pos_c, self._vel_c, self._rho_c)
         planes = cfg.planes or []
         pts = [p.point for p in planes] or [(0.0, 0.0, 0.0)]
@@ -217,7 +218,7 @@ class Solver:
             self._reorder()
         self.neighbours.rebuild(self.pos)
         self._maxima.zero_()
-        self.boundary.before_forces(self)
+        self.boundary.before_forces(self, self.fields)
         self._forces(self.fields)
         wp.launch(k.choose_dt, dim=1, inputs=[p, t_target, self._maxima, self._fail, self._clock], device=dev)
         state, half, candidate = (self.pos, self.vel, self.rho), self._half, self._candidate
@@ -273,6 +274,9 @@ class Solver:
         self._integrate(0.25, state, self.vel, half, COARSER_LEVELS)
         self._forces(self._fields_h, FINEST_LEVEL)
         self._integrate(1.0, state, self._vel_h, candidate, FINEST_LEVEL)  # the fine state at t + dt
+        # walls set from the fluid (mDBC) take the fine state; what the coarse walls take there, from
+        # no coarse state, the coarse passes below overwrite from the launch's start
+        self.boundary.before_forces(self, self._fields_c)
         for dst, src in zip(half, candidate):
             wp.copy(dst, src)
         self._integrate(0.5, state, self.vel, half, COARSER_LEVELS)

@@ -64,12 +64,13 @@ class Mdbc(BoundaryModel):
                                                               solver.solid_lo, solver.solid_hi, solver.ghost],
                   device=solver.device)
 
-    def before_forces(self, solver):
+    def before_forces(self, solver, fields):
         """Once a step, before the first force pass, as DualSPHysics (MdbcCorrector off): the half
-        step's boundary particles inherit it through the integrator."""
+        step's boundary particles inherit it through the integrator. With multirate, once each of
+        the finest level's steps: each level's walls read their own level's fluid in ``fields``."""
         nl = solver.neighbours
         solver.launch(build(solver.scalar).boundary_state, solver.n,
-                      [solver.params, nl.grid, nl.nbr, nl.count, solver.fields, solver.ghost])
+                      [solver.params, nl.grid, nl.nbr, nl.count, fields, solver.ghost])
 
     def face_pressure(self, scalar):
         return build(scalar).face_pressure

@@ -36,8 +36,9 @@ class BoundaryModel:
     def prepare(self, solver):
         """Once, after the solver has allocated its state."""
 
-    def before_forces(self, solver):
-        """Each step, before the first force pass."""
+    def before_forces(self, solver, fields):
+        """Each step of the finest level, before its first force pass, on the state ``fields``
+        (the solver's Fields)."""
 
     def face_pressure(self, scalar):
         """A device pass that reads the pressure on a wall face from the wall itself, or None when
