@@ -184,8 +184,9 @@ class Numerics:
                               "0.2-0.4 give the same answers on the impact cases", lo=MIN_CFL, hi=1.0, node=True)
     dt_fixed: float = setting(0.0, "> 0 forces this time step [s] (tests, stability studies); with multirate, "
                                    "the finest level's")
+    # the neighbour lists are sized for the steps a launch spans: a fresh solver takes a change
     multirate: bool = setting(True, "refinement zones: the coarser levels step at twice the finest level's step "
-                                    "(sph/levels.py); off: every level at the finest's")
+                                    "(sph/levels.py); off: every level at the finest's", applies=RESET)
     # a tank started at rest reaches its discrete equilibrium without bouncing on its walls
     settle_tau: float = setting(0.0, "settling: velocities relax with this time constant [s] until settle_until")
     settle_until: float = setting(0.0, "settling ends at this time [s]")
