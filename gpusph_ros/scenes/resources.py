@@ -15,6 +15,7 @@ from pathlib import Path
 
 from ..sph import boundaries
 from ..sph.config import ConfigError, SolverConfig
+from ..sph.kernels import coarse_stride
 from ..sph.neighbours import default_max_neighbours
 from .boxes import cells
 
@@ -52,7 +53,7 @@ def device_bytes(n: int, cfg: SolverConfig, refined: bool = False) -> int:
     scalar = 8 if cfg.precision == "float64" else 4
     finest = 0.5 if refined else 1.0
     integers = _INTEGER_BYTES + (_LEVEL_BYTES if refined else 0)
-    substeps = 2 if refined and cfg.multirate else 1
+    substeps = coarse_stride(cfg, refined)
     return n * (4 * default_max_neighbours(cfg.dim, cfg.hdx, finest, substeps) + _SCALARS * scalar + integers)
 
 

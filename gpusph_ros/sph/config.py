@@ -311,7 +311,7 @@ class SolverConfig(Numerics, HealthLimits, Domain):
         if not 0.0 < self.rho_min_ratio < 1.0 < self.rho_max_ratio:
             raise ConfigError("rho_min_ratio/rho_max_ratio", (self.rho_min_ratio, self.rho_max_ratio),
                               "0 < rho_min_ratio < 1 < rho_max_ratio")
-        shortest = neighbours.shortest_period(self.h, 2 if self.zones and self.multirate else 1)
+        shortest = neighbours.shortest_period(self.h, kernels.coarse_stride(self, bool(self.zones)))
         for axis, periodic in enumerate(self.periodic):
             if periodic and (self.domain_hi[axis] - self.domain_lo[axis]) < shortest:
                 raise ConfigError("periodic", self.periodic,

@@ -54,7 +54,14 @@ def params(cfg, h_min: "float | None" = None) -> dict:
     return {"kernel": KERNEL_ID[cfg.kernel], "norm": normalisation(cfg.kernel, cfg.dim, cfg.h), "h": cfg.h,
             "inv_h": 1.0 / cfg.h, "eta2": 0.01 * cfg.h ** 2, "norm_unit": _NORM[(cfg.kernel, cfg.dim)],
             "variable_h": int(h_min < cfg.h * (1.0 - 1.0e-9)), "h_min": min(h_min, cfg.h),
-            "coarse_stride": 2 if cfg.multirate and h_min < cfg.h * (1.0 - 1.0e-9) else 1}
+            "coarse_stride": coarse_stride(cfg, h_min < cfg.h * (1.0 - 1.0e-9))}
+
+
+def coarse_stride(cfg, refined: bool) -> int:
+    """How many of the finest level's steps one step of the coarser levels spans: 2 with
+    refinement levels (``refined``) and ``multirate``, else 1. What the neighbour lists are sized
+    for (neighbours.list_skin), before a solver exists too (config, resources)."""
+    return 2 if refined and cfg.multirate else 1
 
 
 # which particles a pass of a multi-rate step takes (``selected``)
@@ -135,10 +142,16 @@ def build(scalar):
         return p.variable_h == 0 or h_a == h_b
 
     @wp.func
+    def finest_level(p: Params, h_a: scalar) -> bool:
+        """Whether a particle of smoothing length h_a is of the finest level (every particle is
+        when all have the same h)."""
+        return h_a < p.h_min * scalar(1.001)
+
+    @wp.func
     def stride(p: Params, h_a: scalar) -> int:
         """How many of the finest level's steps one step of a particle of smoothing length h_a spans:
         1 on the finest level, ``coarse_stride`` (2 with multirate, else 1) on every coarser one."""
-        if p.coarse_stride == 1 or h_a < p.h_min * scalar(1.001):
+        if p.coarse_stride == 1 or finest_level(p, h_a):
             return 1
         return p.coarse_stride
 
@@ -148,7 +161,7 @@ def build(scalar):
         particle of smoothing length h_a."""
         if levels == EVERY_LEVEL:
             return True
-        return (levels == FINEST_LEVEL) == (h_a < p.h_min * scalar(1.001))
+        return (levels == FINEST_LEVEL) == finest_level(p, h_a)
 
     @wp.func
     def own_scale(p: Params, h_a: scalar) -> scalar:
@@ -166,7 +179,8 @@ def build(scalar):
         dw_out[i] = grad_factor(kernel, norm, inv_h, r[i]) * r[i]
 
     return SimpleNamespace(shape=shape, shape_dq=shape_dq, w=w, grad_factor=grad_factor, smoothing=smoothing,
-                           same_level=same_level, own_scale=own_scale, stride=stride, selected=selected,
+                           same_level=same_level, own_scale=own_scale, finest_level=finest_level, stride=stride,
+                           selected=selected,
                            evaluate=evaluate)
 
 

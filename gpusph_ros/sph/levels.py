@@ -86,7 +86,8 @@ def build(scalar):
     vec = wp.types.vector(3, scalar)
     interp = interpolate.build(scalar)
     no_sums, corrected_term, corrected_density = interp.no_sums, interp.corrected_term, interp.corrected_density
-    same_level = kernels.build(scalar).same_level
+    K = kernels.build(scalar)
+    same_level, finest_level = K.same_level, K.finest_level
     Grid = neighbours.grid(scalar).Grid
     S = state.build(scalar)
     Params, Fields = S.Params, S.Fields
@@ -148,7 +149,7 @@ def build(scalar):
             j = nbr[base + k]
             h_j = f.hsml[j]
             donor = f.ptype[j] == FLUID and not same_level(p, h_i, h_j)
-            if f.ptype[j] == PASSIVE and h_j < h_i * scalar(0.999) and h_j > p.h_min * scalar(1.001):
+            if f.ptype[j] == PASSIVE and h_j < h_i * scalar(0.999) and not finest_level(p, h_j):
                 # (the finest level has no zone finer still)
                 finer, own, child = place(p, f.pos[j], h_j, zone_lo, zone_hi, zone_h)
                 donor = finer == 1
