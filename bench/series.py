@@ -2,10 +2,12 @@
 scene's output rate into flat named series; what bench/economy.py and bench/precision.py measure.
 
 Series names: ``points/<probe>/u`` (x velocity), ``points/<probe>/p``, ``columns/<probe>/u``,
-``profiles/<probe>/h<k>`` (x velocity at the k-th height), ``gauges/<probe>``, ``wrenches/<body>/fx``.
+``profiles/<probe>/h<k>`` (x velocity at the k-th height), ``gauges/<probe>``, ``sensors/<probe>`` (a
+pressure sensor's face mean), ``wrenches/<body>/fx``.
 """
 import argparse
 import time
+from pathlib import Path
 
 import numpy as np
 import warp as wp
@@ -23,6 +25,8 @@ def flatten(sample: dict) -> dict:
             out[f"profiles/{name}/h{k}"] = float(vel[0])
     for name, v in sample["gauges"].items():
         out[f"gauges/{name}"] = float(v)
+    for name, v in sample["sensors"].items():
+        out[f"sensors/{name}"] = float(v)
     for name, (force, _) in sample["wrenches"].items():
         out[f"wrenches/{name}/fx"] = float(force[0])
     return out
@@ -43,10 +47,10 @@ def model_of_about(scene_name: str, target: float, **settings):
         dx *= (n / target) ** (1 / 2.5)
 
 
-def run_series(scene_name: str, **settings) -> dict:
-    """Run ``scene_name`` under run ``settings`` (``scenes.settings.resolve`` keys); the record: counts,
-    steps, wall time (kernel loading excluded), MIPPS, how it ended, and ``series`` {name: list}
-    with ``t``."""
+def run_series(scene_name, **settings) -> dict:
+    """Run ``scene_name`` (a built-in scene's name, a file's path, or a parsed Scene) under run
+    ``settings`` (``scenes.settings.resolve`` keys); the record: counts, steps, wall time (kernel
+    loading excluded), MIPPS, how it ended, and ``series`` {name: list} with ``t``."""
     wp.config.log_level = wp.LOG_WARNING
     from gpusph_ros.measure.suite import Measurements
     from gpusph_ros.scenes.build import build_run
@@ -54,7 +58,7 @@ def run_series(scene_name: str, **settings) -> dict:
     from gpusph_ros.scenes.settings import resolve
     from gpusph_ros.sph import HealthError, NeighbourOverflow
 
-    scene = load_scene(scene_name)
+    scene = load_scene(scene_name) if isinstance(scene_name, (str, Path)) else scene_name
     config = resolve(scene, **settings)
     built = build_run(scene, config)
     solver = built.solver()
@@ -77,7 +81,7 @@ def run_series(scene_name: str, **settings) -> dict:
     wall = time.perf_counter() - start
     steps = solver.steps - steps0
     cfg = built.config
-    return {"scene": scene_name, "model": config.reduction.label, "dx": cfg.dx, "kernel": cfg.kernel,
+    return {"scene": scene.name, "model": config.reduction.label, "dx": cfg.dx, "kernel": cfg.kernel,
             "precision": cfg.precision, "device": str(solver.device), "particles": solver.n,
             "fluid_particles": built.fluid_particles, "steps": steps, "wall_s": wall,
             "mipps": solver.n * steps / wall / 1e6 if wall > 0 else 0.0, "simulated_s": solver.time,
