@@ -26,6 +26,7 @@ Studies (``STUDIES``), every run with only the solver (bench/series.py), both co
 """
 import argparse
 import csv
+import functools
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -49,6 +50,7 @@ def dambreak1_force(series: dict) -> dict:
             "peak_fx_0.04s_N": round(float(smooth[j]), 2), "t_peak_0.04s_s": round(float(t[j]), 3)}
 
 
+@functools.lru_cache(maxsize=None)
 def lobovsky_measured() -> dict:
     """Lobovsky et al.'s measured first-impact integrals by sensor height [mm]."""
     from gpusph_ros.analysis import metrics as M
@@ -203,15 +205,15 @@ def chart(study: Study, name: str, csv_path: Path, png: Path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    rows = [row for row in csv.DictReader(csv_path.open()) if study.error(row) is not None]
+    points = [(row, error) for row in csv.DictReader(csv_path.open()) if (error := study.error(row)) is not None]
     fig, ax = plt.subplots(figsize=(6, 4))
-    for row in rows:
-        wall, error = float(row["wall_s"]), study.error(row)
+    for row, error in points:
+        wall = float(row["wall_s"])
         zoned = row["case"].startswith("zoned")
         ax.plot(wall, error, "o" if zoned else "s", color="C1" if zoned else "C0", markersize=8)
         ax.annotate(f"{row['case']} ({int(row['particles']):,} slots)", (wall, error), textcoords="offset points",
                     xytext=(6, 4), fontsize=8)
-    ax.set_xlim(0.0, 1.5 * max(float(row["wall_s"]) for row in rows))  # room for the labels
+    ax.set_xlim(0.0, 1.5 * max(float(row["wall_s"]) for row, _ in points))  # room for the labels
     ax.set_ylim(0.0, None)
     ax.set_xlabel(f"wall time to {study.end:g} s [s], 2-core CPU")
     ax.set_ylabel(study.label, fontsize=9)

@@ -51,10 +51,10 @@ def params(cfg, h_min: "float | None" = None) -> dict:
     0.01 h^2 that regularises 1/r^2 in the viscous and diffusive terms; with ``h_min``, the smallest
     smoothing length of a refined particle set (pairs then read each particle's own)."""
     h_min = cfg.h if h_min is None else h_min
+    refined = h_min < cfg.h * (1.0 - 1.0e-9)
     return {"kernel": KERNEL_ID[cfg.kernel], "norm": normalisation(cfg.kernel, cfg.dim, cfg.h), "h": cfg.h,
             "inv_h": 1.0 / cfg.h, "eta2": 0.01 * cfg.h ** 2, "norm_unit": _NORM[(cfg.kernel, cfg.dim)],
-            "variable_h": int(h_min < cfg.h * (1.0 - 1.0e-9)), "h_min": min(h_min, cfg.h),
-            "coarse_stride": coarse_stride(cfg, h_min < cfg.h * (1.0 - 1.0e-9))}
+            "variable_h": int(refined), "h_min": min(h_min, cfg.h), "coarse_stride": coarse_stride(cfg, refined)}
 
 
 def coarse_stride(cfg, refined: bool) -> int:
