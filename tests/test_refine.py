@@ -25,8 +25,9 @@ import pytest
 from gpusph_ros.measure.sensors import WallPressure
 from gpusph_ros.measure.suite import Measurements
 from gpusph_ros.scenes import resources
-from gpusph_ros.scenes.build import build
+from gpusph_ros.scenes.build import block_particles, build
 from gpusph_ros.scenes.schema import parse_scene
+from gpusph_ros.sph import boundaries
 from gpusph_ros.sph.config import ConfigError
 from gpusph_ros.sph.eos import hydrostatic_density
 from gpusph_ros.sph.state import PASSIVE, VACANT
@@ -70,10 +71,13 @@ def test_a_zone_adds_a_fine_level_over_passive_coarse_fluid_and_a_passive_fine_b
     # slots for the fine particles fluid arriving will need: the zone and band's cells x 1.3, less those there
     cells = (0.2 + 2 * reach) / (dx / 2) * 0.32 / (dx / 2)
     assert (parts.ptype == VACANT).sum() == np.ceil(1.3 * cells) - (fine & np.isin(parts.ptype, (0, PASSIVE))).sum()
-    # fine walls: the daughters of the walls in the zone and in the band
+    # fine walls: in the zone and its band, the uniform fine run's walls there, as many of its spacings
+    # deep as the coarse walls are of theirs (the daughters deeper in the wall are not made)
     fine_walls = parts.pos[fine & (parts.ptype == 1)]
-    assert len(fine_walls) >= 4 * ((plain.ptype == 1) & inside).sum() > 0
-    assert np.all(np.maximum(0.2 - fine_walls[:, 0], fine_walls[:, 0] - 0.4) <= reach)
+    uniform_walls = uniform.pos[uniform.ptype == 1]
+    wall_gap = np.maximum(0.2 - uniform_walls[:, 0], uniform_walls[:, 0] - 0.4)
+    assert same_points(fine_walls, uniform_walls[wall_gap <= reach])
+    assert len(fine_walls) == 2 * ((plain.ptype == 1) & inside).sum() + 2 * 3 * 3  # the band: 3 columns a side
     # each fine particle on the hydrostatic profile at its own depth below the surface
     f = fine & np.isin(parts.ptype, (0, PASSIVE))
     expected = hydrostatic_density(0.2 - parts.pos[f, 1], cfg.rho0, cfg.eos_b, cfg.gamma, cfg.g_norm)
@@ -273,23 +277,28 @@ def test_a_band_around_an_obstacle_and_nested_zones():
     reversed_order = scene(fluid=sc_fluid, obstacles=[pier], refine=zones[::-1])
     with pytest.raises(ConfigError, match=r"refine\[0\].*at least 0.065 m"):  # the file's index, not the level's
         build(reversed_order, dx=0.05)
-    parts = build(sc, dx=0.01).particles
+    model = build(sc, dx=0.01)
+    parts = model.particles
     assert sorted(np.unique(parts.spacing)) == [0.0025, 0.005, 0.01]
-    pier = parts.body == 0  # each level has the pier at its own spacing, each finer one four times the particles
-    counts = [int((pier & (parts.spacing == s)).sum()) for s in (0.01, 0.005, 0.0025)]
-    assert counts[0] > 0 and counts[1] == 4 * counts[0] and counts[2] == 4 * counts[1]
+    # each level has the pier as a block of its own spacing would be, its walls as many of its spacings deep
+    pier, layers = parts.body == 0, boundaries.model(model.config.boundary).layers(model.config.hdx)
+    for s in (0.01, 0.005, 0.0025):
+        block, _ = block_particles([0.4, 0.0], [0.44, 0.1], s, 2, layers, lid=True)
+        mine = parts.pos[pier & (parts.spacing == s), :2]
+        assert len(mine) == len(block) > 0
+        assert np.allclose(np.sort(mine[:, 0] + 1j * mine[:, 1]), np.sort(block[:, 0] + 1j * block[:, 1]))
 
 
 @pytest.mark.unit
 def test_zones_that_would_pass_max_particles_are_refused_before_they_are_made():
     plain = len(build(scene(), dx=0.02).particles)  # 504; the uniform bound (resources.particle_bound) 612
-    # the fine level (1,180 particles with it), then the slots reserved for the fluid it may receive
-    for limit, made in ((1000, "1.18e\\+03"), (1700, "1.75e\\+03")):
+    # the fine level (1,102 particles with it), then the slots reserved for the fluid it may receive
+    for limit, made in ((1000, "1.1e\\+03"), (1600, "1.67e\\+03")):
         with pytest.raises(ConfigError, match=rf"refine.*coarser or smaller zones: the zones make {made} particles.*"
                                               rf"max_particles is {limit:,}"):
             build(scene(refine=[MIDDLE]), dx=0.02, max_particles=limit)
-    model = build(scene(refine=[MIDDLE]), dx=0.02, max_particles=1750)
-    assert len(model.particles) == 1750 > plain
+    model = build(scene(refine=[MIDDLE]), dx=0.02, max_particles=1672)
+    assert len(model.particles) == 1672 > plain
     # the estimate that refusal reads is the solver's own within 2%: wider lists, the levels' books
     estimate = resources.device_bytes(len(model.particles), model.config, refined=True)
     assert estimate == pytest.approx(model.solver().device_bytes(), rel=0.02)

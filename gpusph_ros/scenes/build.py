@@ -150,11 +150,12 @@ def build_from(scene: Scene, cfg: SolverConfig) -> Model:
     pos, rho, mass = [parts.pos[keep]], [parts.rho[keep]], [parts.mass[keep]]
     ptype, body = [parts.ptype[keep]], [parts.body[keep]]
     layers = boundaries.model(cfg.boundary).layers(cfg.hdx)
-    bodies = {}
+    bodies, solids = {}, []
     for k, o in enumerate(scene.obstacles):
         # a wall's thickness in from each side face and from the top of a block lower than the tank
         # (one as tall stands out of the water: no lid needed)
-        block, volume = block_particles(o.lo, o.hi, dx, dim, layers, lid=o.hi[up] < scene.tank[up] - 1e-9)
+        solids.append((o.lo, o.hi, o.hi[up] < scene.tank[up] - 1e-9))
+        block, volume = block_particles(o.lo, o.hi, dx, dim, layers, lid=solids[-1][2])
         pos.append(block)
         rho.append(np.full(len(block), cfg.rho0))  # mostly dry at the start; dynamic ones adjust
         mass.append(np.full(len(block), cfg.rho0 * volume))
@@ -173,7 +174,8 @@ def build_from(scene: Scene, cfg: SolverConfig) -> Model:
                                   "coarser or smaller zones", refined=True)
 
         columns, spacing = refine.split(columns, np.full(len(columns["pos"]), dx), scene.refine, scene.tank, dim, dx,
-                                        cfg.hdx, stratify=lambda rho, dz: restratify(rho, dz, cfg), limit=limit)
+                                        cfg.hdx, stratify=lambda rho, dz: restratify(rho, dz, cfg), limit=limit,
+                                        layers=layers, solids=solids)
         columns, spacing = refine.reserve(columns, spacing, scene.refine, scene.tank, dim, dx, cfg.hdx, limit=limit)
         cfg = cfg.replace(zones=refine.zone_boxes(scene.refine, scene.tank, dim, dx))
     pos = columns["pos"] + np.asarray(scene.origin)

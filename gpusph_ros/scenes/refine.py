@@ -6,7 +6,9 @@ centre lies in the zone gets 2^dim daughters on the sub-lattice of its own cell,
 the uniform lattice at its spacing, mass exact. The parent's fluid stays as passive particles of
 its level, and the parents just outside the zone give passive daughters (and walls) in a band one
 fine kernel support wide: every active particle's kernel then holds particles of its own spacing
-only. Fluid, walls and obstacles are split alike: a wall in a zone is at the zone's spacing too.
+only. Fluid, walls and obstacles are split alike: a wall in a zone is at the zone's spacing too,
+as many layers of it deep as the boundary model takes at that spacing (the daughters deeper in a
+wall than that stand beyond every fluid particle's support of their level, so they are not made).
 
 Zones are applied coarse to fine; a zone that reaches a tank face (lo or hi on the tank's
 boundary) reaches on through that wall, so its wall particles are split too.
@@ -15,7 +17,7 @@ import numpy as np
 
 from ..sph.config import ConfigError
 from ..sph.levels import band_width, sub_offsets
-from ..sph.state import FLUID, PASSIVE, VACANT
+from ..sph.state import BOUNDARY, FLUID, PASSIVE, VACANT
 
 
 def zone_bounds(zone, tank, dim):
@@ -64,6 +66,32 @@ def distance_outside(pos: np.ndarray, lo: np.ndarray, hi: np.ndarray, dim: int) 
     return np.linalg.norm(np.where(np.isfinite(gap), gap, 0.0), axis=1)
 
 
+def wall_depth(pos: np.ndarray, body: np.ndarray, tank, solids, dim: int) -> np.ndarray:
+    """How deep each boundary point lies in its solid: below a tank wall's face (``body`` -1; the
+    tank [0, tank] open at the top) or in from the nearest face of obstacle ``body`` that the fluid
+    meets (``solids``: (lo, hi, lid) per obstacle; the side faces, and the top where ``lid``)."""
+    up = dim - 1
+    lo = np.zeros(dim)
+    hi = np.asarray(tank[:dim], dtype=np.float64).copy()
+    hi[up] = np.inf
+    depth = distance_outside(pos, lo, hi, dim)
+    for k, (s_lo, s_hi, lid) in enumerate(solids):
+        mine = body == k
+        faces = [pos[mine, ax] - s_lo[ax] for ax in range(dim) if ax != up]
+        faces += [s_hi[ax] - pos[mine, ax] for ax in range(dim) if ax != up or lid]
+        depth[mine] = np.min(faces, axis=0) if faces else np.inf
+    return depth
+
+
+def _shallow(columns: dict, thickness: float, tank, solids, dim: int) -> np.ndarray:
+    """Which of ``columns``' particles to keep: all but the boundary ones ``thickness`` or more deep
+    in their solid."""
+    wall = columns["ptype"] == BOUNDARY
+    keep = np.ones(len(wall), dtype=bool)
+    keep[wall] = wall_depth(columns["pos"][wall], columns["body"][wall], tank, solids, dim) < thickness
+    return keep
+
+
 def daughters(columns: dict, spacing: np.ndarray, parents: np.ndarray, target: float, dim: int, stratify=None):
     """The 2^dim daughters of ``parents`` (indices, each of spacing 2 ``target``) at spacing
     ``target``, as columns and spacings."""
@@ -84,7 +112,7 @@ def daughters(columns: dict, spacing: np.ndarray, parents: np.ndarray, target: f
 
 
 def split(columns: dict, spacing: np.ndarray, zones, tank, dim: int, dx: float, hdx: float, stratify=None,
-          limit=None):
+          limit=None, layers=None, solids=()):
     """``columns`` (name -> per-particle array: pos, rho, mass, ptype, body, ...) and ``spacing``
     with each zone's level added (levels.py, adaptive particle refinement):
 
@@ -93,7 +121,10 @@ def split(columns: dict, spacing: np.ndarray, zones, tank, dim: int, dx: float, 
       passive particles (state.PASSIVE); its walls stay as they are;
     - the parent level's active particles outside the zone get daughters too where these lie within
       a kernel support (2 h of the zone's level, and half its spacing) of the zone: walls, and
-      passive fluid, so that every sum of the zone's active particles is over one spacing.
+      passive fluid, so that every sum of the zone's active particles is over one spacing;
+    - with ``layers`` (the boundary model's wall thickness in spacings), a wall's daughters only
+      that many of the zone's spacings deep in their solid (``wall_depth``; ``solids`` the obstacles'
+      (lo, hi, lid)), where the parent level's layers are twice as deep.
 
     ``stratify(rho, dz)``, if given, is the density a daughter dz above its parent of density rho
     starts with (the hydrostatic profile the lattice was built on), else the parent's. ``limit(n)``,
@@ -112,6 +143,11 @@ def split(columns: dict, spacing: np.ndarray, zones, tank, dim: int, dx: float, 
         new, new_spacing = daughters(columns, spacing, np.flatnonzero(inside), target, dim, stratify)
         ring, ring_spacing = daughters(columns, spacing, np.flatnonzero(band), target, dim, stratify)
         keep = distance_outside(ring["pos"], lo, hi, dim) <= reach
+        if layers is not None:
+            thickness = layers * target
+            made = _shallow(new, thickness, tank, solids, dim)
+            new, new_spacing = {name: values[made] for name, values in new.items()}, new_spacing[made]
+            keep &= _shallow(ring, thickness, tank, solids, dim)
         ring = {name: values[keep] for name, values in ring.items()}
         ring["ptype"] = np.where(ring["ptype"] == FLUID, PASSIVE, ring["ptype"]).astype(np.int32)
         if limit is not None:
