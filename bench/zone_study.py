@@ -18,9 +18,10 @@ Studies (``STUDIES``), every run with only the solver (bench/series.py), both co
   the wall particle in the corner the surge hits reaches 1.22 rho0 in the uniform 5 mm run, as
   rho0 (1 + u / c0) says for 3 m/s against c0 = 17 m/s, and passes 1.25 in the zoned one; a wall
   particle cannot be excluded, so the default bound fails the run there.
-- ``dambreak2``: the 0.10 m bore of Arnason et al. (2009) in the flume's x-z section (2D, as
-  docs/results/dambreak2.md's best runs), with Wendland and laminar + SPS, to 13 s; every wall a
-  wall of particles, since zones take no planes; the mean depth-averaged velocity at x = 11.1 m over
+- ``dambreak2``: the 0.10 m bore of Arnason et al. (2009) in the flume's x-z section (``model: 2d``
+  of ``dambreak2_010``, as docs/results/dambreak2.md's best runs; zones across the flume's width
+  become the section's), with Wendland and laminar + SPS, to 13 s; every wall a wall of particles,
+  since zones take no planes; the mean depth-averaged velocity at x = 11.1 m over
   the 6 s behind the bore against the measured 0.553 m/s. Zones: ``probe``, 3 m around the probe; ``bed``,
   the whole wet bed from 0.5 m upstream of the gate (the 0.02 m bed is half a 4 cm spacing deep).
 """
@@ -96,15 +97,6 @@ def dambreak2_bore(series: dict) -> dict:
     return {"arrival_s": round(arrival, 2), "mean_velocity_m_s": round(mean, 4), "covered_s": round(covered, 1)}
 
 
-DAMBREAK2_2D = {  # config/scenes/dambreak2_010.yaml's x-z section (scenes/reduce.py's 2d), particle walls
-    "name": "dambreak2_010_2d", "dim": 2, "tank": [16.6, 0.45], "depth": 0.10, "walls": "particles",
-    "fluid": [{"name": "upstream", "lo": [0.0, 0.0], "hi": [5.9, 0.10]},
-              {"name": "downstream", "lo": [5.9, 0.0], "hi": [16.6, 0.02]}],
-    "probes": {"bore": {"type": "column", "position": [11.1], "radius_dx": 3}},
-    "run": {"end_time": 13.0, "output_rate": 10.0, "kernel": "wendland", "viscosity": "sps"},
-}
-
-
 def _number(value):
     """A CSV cell as a finite float, or None."""
     try:
@@ -124,13 +116,14 @@ def _relative(column: str, measured: float):
 
 @dataclass
 class Study:
-    scene: object  # a built-in scene's name, or scene data (a dict)
+    scene: str  # a built-in scene's name
     end: float  # [s] simulated
     measure: object  # series -> {column: value}
     error: object  # a CSV row -> its |error| against the measurement [%], None where it measured nothing
     label: str  # the chart's y axis
     cases: dict = field(default_factory=dict)  # name -> (dx, refine or None)
     settings: dict = field(default_factory=dict)  # run settings every case takes
+    changes: dict = field(default_factory=dict)  # scene keys every case replaces
 
 
 def _zone(name, lo, hi, ratio=0.5):
@@ -149,18 +142,19 @@ STUDIES = {
                        "zoned_10mm_5mm": (0.01, _zone("wall", [1.31, 0.0], [1.61, 0.3])),
                        "zoned_5mm_2.5mm": (0.005, _zone("wall", [1.31, 0.0], [1.61, 0.3]))},
                       {"rho_max_ratio": 1.3}),
-    "dambreak2": Study(DAMBREAK2_2D, 13.0, dambreak2_bore, _relative("mean_velocity_m_s", 0.553),
+    "dambreak2": Study("dambreak2_010", 13.0, dambreak2_bore, _relative("mean_velocity_m_s", 0.553),
                        "|error| of the mean bore velocity at x = 11.1 m [%]",
                        {"uniform_2cm": (0.02, None), "uniform_4cm": (0.04, None),
-                        "zoned_4cm_2cm_probe": (0.04, _zone("probe", [9.6, 0.0], [12.6, 0.2])),
-                        "zoned_4cm_2cm_bed": (0.04, _zone("bed", [5.4, 0.0], [16.6, 0.2]))}),
+                        "zoned_4cm_2cm_probe": (0.04, _zone("probe", [9.6, 0.0, 0.0], [12.6, 1.6, 0.2])),
+                        "zoned_4cm_2cm_bed": (0.04, _zone("bed", [5.4, 0.0, 0.0], [16.6, 1.6, 0.2]))},
+                       {"model": "2d", "kernel": "wendland", "viscosity": "sps"}, {"walls": "particles"}),
 }
 
 
 def scene_of(study: Study, refine):
     from gpusph_ros.scenes.schema import load_scene, parse_scene
 
-    data = yaml.safe_load(load_scene(study.scene).text) if isinstance(study.scene, str) else dict(study.scene)
+    data = {**yaml.safe_load(load_scene(study.scene).text), **study.changes}
     if refine:
         data["refine"] = refine
     return parse_scene(data)

@@ -66,6 +66,34 @@ def test_reductions_that_do_not_fit_are_refused_with_the_reason():
     assert "nothing lies out of reach" in options["not applicable"]["crop"]
 
 
+def test_the_2d_section_carries_zones_that_span_the_width():
+    """A zone across the flume's width is the section's zone: the model is the one a 2D scene with
+    that zone builds, particle for particle; a narrower zone, or a reduction that does not carry
+    zones, is refused naming its field."""
+    db2 = dataclasses.replace(load_scene("dambreak2_010"), walls={face: "particles" for face in ("x_min", "x_max",
+                                                                                                 "y_min", "y_max",
+                                                                                                 "floor")})
+    zone = {"name": "probe", "lo": [9.6, 0.0, 0.0], "hi": [12.6, 1.6, 0.2], "ratio": 0.5}
+    zoned = dataclasses.replace(db2, refine=parse_scene({**yaml.safe_load(load_scene("dambreak2_010").text),
+                                                         "refine": [zone]}).refine)
+    section = build_run(zoned, resolve(zoned, dx=0.05, model="2d")).particles
+    by_hand = parse_scene({"name": "section", "dim": 2, "tank": [16.6, 0.45], "depth": 0.10, "walls": "particles",
+                           "fluid": [{"name": "upstream", "lo": [0.0, 0.0], "hi": [5.9, 0.10]},
+                                     {"name": "downstream", "lo": [5.9, 0.0], "hi": [16.6, 0.02]}],
+                           "refine": [{"name": "probe", "lo": [9.6, 0.0], "hi": [12.6, 0.2], "ratio": 0.5}]})
+    expected = build_run(by_hand, resolve(by_hand, dx=0.05)).particles
+    assert (section.spacing == 0.025).sum() > 0
+    for name in ("pos", "rho", "mass", "ptype", "spacing"):
+        assert np.array_equal(getattr(section, name), getattr(expected, name)), name
+    narrow = dataclasses.replace(zoned, refine=[dataclasses.replace(zoned.refine[0], hi=(12.6, 0.8, 0.2))])
+    with pytest.raises(ConfigError) as err:
+        resolve(narrow, dx=0.05, model="2d")
+    assert err.value.field == "refine[0]" and "spanning the tank's width" in str(err.value)
+    with pytest.raises(ConfigError) as err:
+        resolve(zoned, dx=0.05, model="slab")
+    assert err.value.field == "model" and "full or 2d" in str(err.value)
+
+
 def test_2d_until_reflection_is_the_section_without_the_obstruction_and_says_until_when():
     """DamBreak 1 (lab): column face at 0.4 m, obstruction's upstream face at 0.90 m, probe at
     0.754 m, a 1 cm bed under 0.30 m: Stoker's bore (1.891 m/s) takes 0.264 s to the obstruction,

@@ -2,6 +2,8 @@
 
 - ``2d``: a 3D scene whose flow is uniform across y (every fluid box and obstacle spans the tank's
   width; DamBreak 2) becomes its x-z section. Probes keep x (and z); masses are per metre of width.
+  Refinement zones that span the width become the section's zones; the other reductions do not
+  carry zones yet.
 - ``slab``: the same scene cut to a thin periodic slab across y, ``slab_width`` wide (0: the
   narrowest the cell search allows, ``min_slab_cells`` spacings, a little over three kernel
   supports), probes moved to its middle. 3D turbulence and the 3D kernel survive; the side walls,
@@ -82,7 +84,7 @@ def uniform_across_y(scene: Scene, obstacles: bool = True) -> str:
 
 
 def _section(scene: Scene) -> Scene:
-    """The x-z section of a scene uniform across y, as a 2D scene."""
+    """The x-z section of a scene uniform across y, as a 2D scene (its zones too)."""
     def box2(box):
         fields = {f.name: getattr(box, f.name) for f in dataclasses.fields(box)}
         fields["lo"] = (box.lo[0], box.lo[2], 0.0)
@@ -98,7 +100,8 @@ def _section(scene: Scene) -> Scene:
                                gravity=(scene.gravity[0], scene.gravity[2], 0.0),
                                periodic=(scene.periodic[0], False, False),
                                walls=walls, fluid=[box2(b) for b in scene.fluid],
-                               obstacles=[box2(o) for o in scene.obstacles], probes=probes)
+                               obstacles=[box2(o) for o in scene.obstacles], refine=[box2(z) for z in scene.refine],
+                               probes=probes)
 
 
 def _narrow_obstacles(scene: Scene) -> list:
@@ -221,9 +224,15 @@ def apply(scene: Scene, reduction: Reduction, end_time: float, dx: float, hdx: f
     """``scene`` reduced as ``reduction`` says; ConfigError naming the setting when a reduction
     does not fit the scene."""
     reduction.validate()
-    if scene.refine and reduction.label != Reduction().label:
-        raise ConfigError("model", reduction.label, "full, without crop or wall_planes: the scene's refinement zones "
-                                                    "(refine:) are not carried through a reduction yet")
+    if scene.refine and reduction.label not in (Reduction().label, Reduction(model="2d").label):
+        raise ConfigError("model", reduction.label, "full or 2d, without crop or wall_planes: the scene's refinement "
+                                                    "zones (refine:) are not carried through the others yet")
+    if scene.refine and reduction.model == "2d":
+        for k, zone in enumerate(scene.refine):
+            if zone.lo[1] > 0.0 or zone.hi[1] < scene.tank[1]:
+                raise ConfigError(f"refine[{k}]", zone.name, f"a zone spanning the tank's width y = [0, "
+                                                             f"{scene.tank[1]:g}] for model 2d (the section stands "
+                                                             "for every y)")
     if reduction.model == "2d_until_reflection":
         why = uniform_across_y(scene, obstacles=False) or ("" if valid_until(scene) else NO_PROBE_UPSTREAM)
         if why:
