@@ -17,8 +17,8 @@ particles (sph/levels.py, adaptive particle refinement).
   uniform fine run's than the uniform coarse run's.
 - Multirate (the coarse level at twice the fine level's step) launches half the steps and gives
   the collapse the front of every level at the fine step, and lands on the asked time.
-- A run-up leaving a zone along a wall keeps the walls at the zone's edge (their density no lower
-  than rho0, wall_density_floor), where unbounded one fell past the run's bound.
+- A run-up leaving a zone along a wall keeps the walls at the zone's faces (their density no lower
+  than rho0), where unbounded one fell past the run's bound.
 - A zone that cannot be built is refused naming the field.
 """
 import re
@@ -93,8 +93,7 @@ def test_a_zone_adds_a_fine_level_over_passive_coarse_fluid_and_a_passive_fine_b
 def test_a_zone_over_the_whole_tank_runs_as_the_uniform_run_at_its_spacing(boundary):
     column = {**TANK, "fluid": [{"name": "water", "lo": [0.0, 0.0], "hi": [0.2, 0.2]}]}
     whole = {"name": "all", "lo": [0.0, 0.0], "hi": [0.6, 0.32], "ratio": 0.5}
-    # zones keep a dynamic wall's density at rho0 or above (wall_density_floor): the uniform run too
-    uniform = build(parse_scene(column), dx=0.01, boundary=boundary, precision="float64", wall_density_floor="always")
+    uniform = build(parse_scene(column), dx=0.01, boundary=boundary, precision="float64")
     zoned = build(parse_scene({**column, "refine": [whole]}), dx=0.02, boundary=boundary, precision="float64",
                   multirate=False)
     runs = []
@@ -180,17 +179,17 @@ def test_a_3d_still_tank_with_a_zone_is_as_still_and_hydrostatic_as_uniform_tank
     """3D, dx 4 cm (5 layers of water) with a 2 cm zone over the middle third, to 2 s. Uniform 3D
     tanks this shallow read above hydrostatic themselves (measured +1.6 to +2.5% at 2 cm, +2.5 to
     +4.3% at 4 cm, the narrow tank's side walls), so each side of the interface is held to the
-    uniform run at its own spacing, its walls kept at rho0 or above as the zones' are
-    (wall_density_floor): every depth bin within 2% of it (measured within 1.8%, the fine side's
-    top bin +3.7% against +1.9%; within 1.2% with neither floored), mean speed below 0.5% and the
-    fastest particle below 1% of sqrt(g H), mass exact."""
+    uniform run at its own spacing: every depth bin within 2% of it (measured within 1.6%, the fine
+    side's top bin; 1.2% before the coarse walls at the zone's faces were kept at rho0 or above,
+    levels.floor_walls), mean speed below 0.5% and the fastest particle below 1% of sqrt(g H), mass
+    exact."""
     depth, width = 0.2, 0.16
     tank = {"name": "tank", "dim": 3, "tank": [0.6, width, 0.32],
             "fluid": [{"name": "water", "lo": [0.0, 0.0, 0.0], "hi": [0.6, width, depth]}]}
     zone = {"name": "middle", "lo": [0.2, 0.0, 0.0], "hi": [0.4, width, 0.32], "ratio": 0.5}
 
-    def still(data, dx):  # the uniform tanks' walls kept at rho0 or above too, as the zones' are
-        model = build(parse_scene(data), dx=dx, wall_density_floor="always")
+    def still(data, dx):
+        model = build(parse_scene(data), dx=dx)
         solver = model.solver()
         solver.advance(2.0)
         return model, solver.snapshot()
@@ -255,18 +254,20 @@ def test_a_column_collapsing_into_a_zone_changes_level_there():
 
 
 @pytest.mark.physics
-def test_a_run_up_leaving_a_zone_along_a_wall_keeps_the_walls_at_its_edge():
+def test_a_run_up_leaving_a_zone_along_a_wall_keeps_the_walls_at_its_edge(monkeypatch):
     # a 0.3 m column's surge runs up the far wall through the top of a zone 0.06 m deep at that wall:
-    # a wall particle of the coarse level at the zone's top reads only the coarse fluid above it,
-    # running away from it, and unbounded its density fell past the run's bound at 0.34 s (measured);
-    # kept at rho0 or above (wall_density_floor, on with zones) the run-up passes the zone's top with
-    # no particle lost
+    # a coarse wall particle at the zone's top reads only the coarse fluid above it, running away from
+    # it; unbounded (levels.floor_walls not launched) its density fell past the run's bound at 0.34 s
+    # (measured); kept at rho0 or above, the run-up passes the zone's top with no particle lost
     sc = parse_scene({"name": "runup", "dim": 2, "tank": [0.9, 0.5],
                       "fluid": [{"name": "water", "lo": [0.0, 0.0], "hi": [0.3, 0.3]}],
                       "refine": [{"name": "wall", "lo": [0.6, 0.0], "hi": [0.9, 0.06], "ratio": 0.5}]})
-    unbounded = build(sc, dx=0.01, wall_density_floor="never")
-    with pytest.raises(HealthError, match="density_bounds") as failure:
-        unbounded.solver().advance(0.6)
+    unbounded = build(sc, dx=0.01)
+    solver = unbounded.solver()
+    with monkeypatch.context() as patch:
+        patch.setattr(solver, "_floor_walls", lambda: None)
+        with pytest.raises(HealthError, match="density_bounds") as failure:
+            solver.advance(0.6)
     particle = int(re.search(r"particle (\d+)", str(failure.value)).group(1))
     assert unbounded.particles.ptype[particle] == BOUNDARY
     assert unbounded.particles.pos[particle, 1] == pytest.approx(0.06, abs=0.01)

@@ -21,7 +21,6 @@ KERNELS = kernels.NAMES
 VISCOSITIES = viscosity.NAMES
 BOUNDARIES = boundaries.NAMES
 MDBC_SLIPS = boundaries.mdbc.SLIPS
-WALL_FLOORS = boundaries.WALL_FLOORS
 DENSITY_DIFFUSIONS = density.DIFFUSIONS
 PRECISIONS = ("float32", "float64")
 
@@ -165,10 +164,6 @@ class Numerics:
                             applies=RESET, node=True)
     mdbc_slip: str = setting("none", "boundary velocity under mdbc: none (the wall's, zero), no_slip or free_slip "
                                      "(DualSPHysics' SlipMode)", choices=MDBC_SLIPS, node=True)
-    wall_density_floor: str = setting(
-        "zones", "when a dynamic wall's density is kept at least rho0 (DualSPHysics 5.4 keeps every one so): zones "
-                 "(in runs with refinement zones, where a wall at a zone's edge reads its level's fluid on one side "
-                 "only), always, never", choices=WALL_FLOORS)
     mk_beta: float = setting(2.0, "fluid / boundary particle spacing ratio of Monaghan-Kajtar walls (thesis "
                                   "Eq. 2.26), >= 1", applies=RESET)
     density_diffusion: str = setting("delta", "density treatment: none, or delta-SPH (Molteni & Colagrossi 2009)",

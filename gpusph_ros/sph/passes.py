@@ -340,8 +340,7 @@ def _time_passes(scalar):
         own step (kernels.stride finest-level steps).
 
         f = 1/2 with the rates at n (predictor), f = 1 with the rates at n + 1/2 (corrector).
-        Boundary particles keep position and velocity; dynamic ones update density (no lower than
-        rho0 where Params.wall_floor). A passive
+        Boundary particles keep position and velocity; dynamic ones update density. A passive
         particle (no rates) moves with the velocity its level's interpolation gave it (levels.py).
         """
         i = wp.tid()
@@ -350,12 +349,6 @@ def _time_passes(scalar):
         dt = factor * scalar(clock[DT]) * scalar(stride(p, hsml[i]))
         rho_out[i] = rho[i] + dt * drho[i]
         if not carries_fluid(ptype[i]):
-            if p.wall_continuity != 0 and p.wall_floor != 0:
-                # a wall below rho0 pulls the fluid onto it (DualSPHysics 5.4 keeps every dynamic wall
-                # at rho0 or above, JSphCpu::ComputeSymplecticPre, "to prevent absorption of fluid
-                # particles by boundaries"); at a zone's edge a wall reads its level's fluid on one
-                # side only, and fluid running past it would draw it down without bound
-                rho_out[i] = wp.max(rho_out[i], p.rho0)
             pos_out[i] = pos[i]
             vel_out[i] = vel[i]
             return

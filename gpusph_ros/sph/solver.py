@@ -288,9 +288,10 @@ class Solver:
         self._integrate(1.0, candidate, self._vel_h, candidate, FINEST_LEVEL)
 
     def _relevel(self):
-        """Each fluid particle's level kind from where it stands, and daughters for the fluid that
-        reaches a finer level's band (levels.py)."""
+        """Each fluid particle's level kind from where it stands, daughters for the fluid that
+        reaches a finer level's band, and the walls inside a finer zone no lower than rho0 (levels.py)."""
         n, dev, p, L = self.n, self.device, self.params, levels.build(self.scalar)
+        self._floor_walls()
         wp.launch(L.relevel, dim=n, inputs=[p, self.pos, self.hsml, self.ptype, self._needs_list,
                                             self._zone_lo, self._zone_hi, self._zone_h, self._spawned, self._want,
                                             self._vacant], device=dev)
@@ -301,6 +302,12 @@ class Solver:
                                           self._offsets, self.pos, self.vel, self.rho, self.mass, self.hsml,
                                           self.ptype, self.body, self._needs_list, self._spawned, self.ids,
                                           self.neighbours.x_build, self._fail, health.ZONE_RESERVE], device=dev)
+
+    def _floor_walls(self):
+        """The dynamic walls inside a finer zone no lower than rho0 (levels.floor_walls)."""
+        wp.launch(levels.build(self.scalar).floor_walls, dim=self.n,
+                  inputs=[self.params, self.pos, self.hsml, self.ptype, self.rho, self._zone_lo, self._zone_hi,
+                          self._zone_h], device=self.device)
 
     def shepard_filter(self, rebuild: bool = True):
         """Replace the fluid density by its Shepard average (thesis Eq. 2.28)."""

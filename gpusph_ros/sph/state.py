@@ -57,7 +57,6 @@ def build(scalar):
         wall_volume: int  # 1: the wall particles carry a density and a fluid volume (boundaries.model)
         wall_continuity: int  # 1: the wall particles' density follows the continuity equation
         mdbc_slip: int  # boundaries.mdbc.SLIP_ID
-        wall_floor: int  # 1: a wall's density by the continuity equation stays at least rho0
         lj_d: scalar
         lj_r0: scalar
         mk_k: scalar

@@ -27,9 +27,6 @@ from .model import BoundaryModel
 # models of walls made of particles (the run setting ``boundary``); their ids are their places here
 PARTICLE_MODELS = (lennard_jones.MODEL, monaghan_kajtar.MODEL, dynamic.MODEL, mdbc.MODEL)
 NAMES = tuple(m.name for m in PARTICLE_MODELS)
-# when a wall whose density follows the continuity equation is bounded below by rho0 (the run setting
-# wall_density_floor): with refinement zones only, always (DualSPHysics 5.4's dynamic walls), never
-WALL_FLOORS = ("zones", "always", "never")
 BOUNDARY_ID = {name: k for k, name in enumerate(NAMES)}
 # every wall treatment a study compares: the repulsive ones, the planes, the ones with a volume
 STUDIED = tuple(m.name for m in (lennard_jones.MODEL, monaghan_kajtar.MODEL, planes.MODEL, dynamic.MODEL, mdbc.MODEL))
@@ -63,10 +60,9 @@ def model_params(name: str, g: float, depth: float, dx: float, mk_beta: float, d
 
 def params(cfg) -> dict:
     """The Params fields of the walls of ``cfg`` (a SolverConfig): the particle walls' model, mDBC's
-    slip mode, the number of planes and whether a dynamic wall's density stays at least rho0."""
-    floor = cfg.wall_density_floor == "always" or (cfg.wall_density_floor == "zones" and bool(cfg.zones))
+    slip mode and the number of planes."""
     return {**model_params(cfg.boundary, cfg.g_norm, cfg.depth, cfg.dx, cfg.mk_beta, cfg.dim),
-            "mdbc_slip": mdbc.SLIP_ID[cfg.mdbc_slip], "n_planes": len(cfg.planes), "wall_floor": int(floor)}
+            "mdbc_slip": mdbc.SLIP_ID[cfg.mdbc_slip], "n_planes": len(cfg.planes)}
 
 
 @functools.lru_cache(maxsize=None)
