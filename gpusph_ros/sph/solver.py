@@ -289,7 +289,8 @@ class Solver:
 
     def _relevel(self):
         """Each fluid particle's level kind from where it stands, daughters for the fluid that
-        reaches a finer level's band, and the walls inside a finer zone no lower than rho0 (levels.py)."""
+        reaches a finer level's band, and the walls whose band reaches into a finer zone no lower
+        than rho0 (levels.py)."""
         n, dev, p, L = self.n, self.device, self.params, levels.build(self.scalar)
         self._floor_walls()
         wp.launch(L.relevel, dim=n, inputs=[p, self.pos, self.hsml, self.ptype, self._needs_list,
@@ -304,7 +305,7 @@ class Solver:
                                           self.neighbours.x_build, self._fail, health.ZONE_RESERVE], device=dev)
 
     def _floor_walls(self):
-        """The dynamic walls inside a finer zone no lower than rho0 (levels.floor_walls)."""
+        """The dynamic walls whose band reaches into a finer zone no lower than rho0 (levels.floor_walls)."""
         wp.launch(levels.build(self.scalar).floor_walls, dim=self.n,
                   inputs=[self.params, self.pos, self.hsml, self.ptype, self.rho, self._zone_lo, self._zone_hi,
                           self._zone_h], device=self.device)
