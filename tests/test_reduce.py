@@ -70,12 +70,8 @@ def test_the_2d_section_carries_zones_that_span_the_width():
     """A zone across the flume's width is the section's zone: the model is the one a 2D scene with
     that zone builds, particle for particle; a narrower zone, or a reduction that does not carry
     zones, is refused naming its field."""
-    db2 = dataclasses.replace(load_scene("dambreak2_010"), walls={face: "particles" for face in ("x_min", "x_max",
-                                                                                                 "y_min", "y_max",
-                                                                                                 "floor")})
     zone = {"name": "probe", "lo": [9.6, 0.0, 0.0], "hi": [12.6, 1.6, 0.2], "ratio": 0.5}
-    zoned = dataclasses.replace(db2, refine=parse_scene({**yaml.safe_load(load_scene("dambreak2_010").text),
-                                                         "refine": [zone]}).refine)
+    zoned = parse_scene({**yaml.safe_load(load_scene("dambreak2_010").text), "walls": "particles", "refine": [zone]})
     section = build_run(zoned, resolve(zoned, dx=0.05, model="2d")).particles
     by_hand = parse_scene({"name": "section", "dim": 2, "tank": [16.6, 0.45], "depth": 0.10, "walls": "particles",
                            "fluid": [{"name": "upstream", "lo": [0.0, 0.0], "hi": [5.9, 0.10]},

@@ -154,8 +154,9 @@ def build_from(scene: Scene, cfg: SolverConfig) -> Model:
     for k, o in enumerate(scene.obstacles):
         # a wall's thickness in from each side face and from the top of a block lower than the tank
         # (one as tall stands out of the water: no lid needed)
-        solids.append((o.lo, o.hi, o.hi[up] < scene.tank[up] - 1e-9))
-        block, volume = block_particles(o.lo, o.hi, dx, dim, layers, lid=solids[-1][2])
+        lid = o.hi[up] < scene.tank[up] - 1e-9
+        solids.append((o.lo, o.hi, lid))
+        block, volume = block_particles(o.lo, o.hi, dx, dim, layers, lid=lid)
         pos.append(block)
         rho.append(np.full(len(block), cfg.rho0))  # mostly dry at the start; dynamic ones adjust
         mass.append(np.full(len(block), cfg.rho0 * volume))

@@ -79,7 +79,7 @@ def wall_depth(pos: np.ndarray, body: np.ndarray, tank, solids, dim: int) -> np.
         mine = body == k
         faces = [pos[mine, ax] - s_lo[ax] for ax in range(dim) if ax != up]
         faces += [s_hi[ax] - pos[mine, ax] for ax in range(dim) if ax != up or lid]
-        depth[mine] = np.min(faces, axis=0) if faces else np.inf
+        depth[mine] = np.min(faces, axis=0)
     return depth
 
 
