@@ -20,6 +20,7 @@ import numpy as np
 import yaml
 from std_msgs.msg import String
 
+from . import state_file
 from .measure import cloud
 from .measure.suite import Measurements
 from .output import frames, markers, messages
@@ -158,13 +159,25 @@ class Run:
                 "next_output": self.next_output, "wall": self.wall, "time_origin_ns": self.time_origin_ns,
                 "output": dataclasses.asdict(self.output)}
 
+    def check_state(self, state) -> tuple:
+        """(next_output, wall, time origin) of ``state`` if it is ``checkpoint()`` of a run of this
+        scene and settings; else ValueError, KeyError or TypeError saying what does not fit."""
+        if not isinstance(state, dict) or state.get("format") != CHECKPOINT_FORMAT:
+            raise ValueError(f"checkpoint: not a run's state of format {CHECKPOINT_FORMAT}")
+        output = {f.name for f in dataclasses.fields(self.output)}
+        if not isinstance(state.get("output"), dict) or set(state["output"]) != output:
+            raise ValueError(f"checkpoint: its output settings are not {', '.join(sorted(output))}")
+        problem = checkpoint.mismatch(self.solver, state["solver"])
+        if problem:
+            raise ValueError(f"checkpoint: {problem}")
+        return int(state["next_output"]), float(state["wall"]), int(state["time_origin_ns"])
+
     def restore(self, state: dict):
-        """Continue from ``checkpoint()`` of a run of the same scene and settings."""
-        if state.get("format") != CHECKPOINT_FORMAT:
-            raise ValueError(f"checkpoint: format {state.get('format')!r}, this version reads {CHECKPOINT_FORMAT}")
+        """Continue from ``checkpoint()`` of a run of the same scene and settings (``check_state``
+        first: nothing changes for a state that does not fit)."""
+        next_output, wall, origin = self.check_state(state)
         checkpoint.restore(self.solver, state["solver"])
-        self.next_output, self.wall = state["next_output"], state["wall"]
-        self.time_origin_ns = state["time_origin_ns"]
+        self.next_output, self.wall, self.time_origin_ns = next_output, wall, origin
         self.output = dataclasses.replace(self.output, **state["output"])
 
     def open_recording(self, path, compression: str = None, earlier: list = None):
@@ -272,40 +285,13 @@ class Run:
                 **self.exclusions(), **self.solver.health_peaks}
 
 
-CHECKPOINT_FILE = "checkpoint.pkl"
-
-
-def write_state(path, state: dict) -> Path:
-    """Pickle ``state`` (a checkpoint, a node's saved state) to ``path``, replaced whole: written
-    beside it first, so a kill leaves the previous one."""
-    import pickle
-
-    path = Path(path).expanduser()
-    tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "wb") as f:
-        pickle.dump(state, f, protocol=pickle.HIGHEST_PROTOCOL)
-    tmp.replace(path)
-    return path
-
-
-def read_state(path, keys) -> dict:
-    """What ``write_state`` wrote to ``path``, holding ``keys``; ValueError saying why not (a missing,
-    cut or foreign file), never a traceback."""
-    import pickle
-
-    try:
-        with open(Path(path).expanduser(), "rb") as f:
-            state = pickle.load(f)
-        missing = [k for k in keys if k not in state]
-    except Exception as err:
-        raise ValueError(f"{path} cannot be read ({type(err).__name__}: {err})") from None
-    if missing:
-        raise ValueError(f"{path} cannot be read (it lacks {', '.join(missing)})")
-    return state
+CHECKPOINT_FILE = "checkpoint.npz"
+# what versions before the data-only state file wrote: recognised, never loaded (state_file)
+PICKLED_CHECKPOINT = "checkpoint.pkl"
 
 
 class Checkpoints:
-    """A recorded run's checkpoints, in its bag folder (``checkpoint.pkl``): the run's state
+    """A recorded run's checkpoints, in its bag folder (``checkpoint.npz``, a ``state_file``): the run's state
     (``Run.checkpoint``), what rebuilds it (``invocation``: scene, run configurations, settings) and
     how much of the recording it accounts for. Written every ``interval`` seconds of wall clock at
     an output (the recording's open chunk closed first, so that the file on disk holds every message
@@ -322,8 +308,9 @@ class Checkpoints:
 
     def write(self, run) -> Path:
         self.recorder.flush()
-        write_state(self.path, {"invocation": self.invocation, "run": run.checkpoint(),
-                                "recording": {"file": self.recorder.file_name, "messages": self.recorder.count}})
+        state_file.write(self.path, "checkpoint", {
+            "invocation": self.invocation, "run": run.checkpoint(),
+            "recording": {"file": self.recorder.file_name, "messages": self.recorder.count}})
         self._last = time.monotonic()
         return self.path
 
@@ -335,34 +322,54 @@ def resume(folder):
     """(run, recorder, invocation) continuing the recorded run in ``folder`` from its checkpoint:
     the run rebuilt as it was invoked and restored; the recording's file the checkpoint counted
     cut back to what it counted (a killed run wrote on after it), any later file set aside as
-    ``.superseded``, and a new file ``<name>_<k>.mcap`` opened after them. ValueError when there is
-    nothing to resume."""
-    from .output.recording import bag_files, file_entries, is_whole, repair
+    ``.superseded``, and a new file ``<name>_<k>.mcap`` opened after them. ValueError, before
+    anything in the folder changes, when there is nothing to resume or when the bag no longer holds
+    every message the checkpoint counts (the resumed recording would have a gap)."""
+    from .output.recording import bag_files, file_entries, is_whole, repair, whole_messages
     from .scenes.schema import load_scene
     from .scenes.settings import resolve
 
     folder = Path(folder)
     path = folder / CHECKPOINT_FILE
     if not path.is_file():
+        if (folder / PICKLED_CHECKPOINT).exists():
+            raise ValueError(f"--resume: {folder} holds {PICKLED_CHECKPOINT}, the checkpoint of an earlier version, "
+                             "a Python pickle; this version never loads a pickle, since loading one can run any code "
+                             "it carries: run the scene again")
         raise ValueError(f"--resume: {folder} has no {CHECKPOINT_FILE}: not a run stopped before its end (a "
                          "completed run removes it; checkpoint_interval 0 writes none)")
     try:
-        state = read_state(path, ("invocation", "run", "recording"))
-    except ValueError as err:
-        raise ValueError(f"--resume: {err}") from None
-    invocation, recording = state["invocation"], state["recording"]
-    scene = load_scene(invocation["scene"])
-    run = Run(scene, resolve(scene, files=invocation["run_config"], sets=invocation["sets"]))
-    run.restore(state["run"])
+        state = state_file.read(path, "checkpoint", ("invocation", "run", "recording"))
+        invocation, recording = state["invocation"], state["recording"]
+        scene = load_scene(invocation["scene"])
+        run = Run(scene, resolve(scene, files=invocation["run_config"], sets=invocation["sets"]))
+        run.restore(state["run"])
+        counted_file, counted = str(recording["file"]), int(recording["messages"])
+    except (KeyError, TypeError, ValueError) as err:  # ConfigError and StateFileError are ValueErrors
+        raise ValueError(f"--resume: {err}" if isinstance(err, ValueError) else
+                         f"--resume: {path} is not a checkpoint this version wrote ({type(err).__name__}: {err})"
+                         ) from None
     files = bag_files(folder)
     names = [f.name for f in files]
-    if recording["file"] not in names:
-        raise ValueError(f"--resume: {folder} lacks {recording['file']}, the file its checkpoint counts")
-    counted = names.index(recording["file"])
-    for later in files[counted + 1:]:
+    if counted_file not in names:
+        raise ValueError(f"--resume: {folder} lacks {counted_file}, the file its checkpoint counts")
+    k = names.index(counted_file)
+    for earlier in files[:k]:
+        if not is_whole(earlier):
+            raise ValueError(f"--resume: {earlier} is cut short: the recording before the checkpoint has lost "
+                             "messages, and a resumed run would leave a gap in it; gpusph-analyze --repair mends "
+                             "the bag's last file only, so the run cannot be resumed")
+    held, last = whole_messages(files[k])
+    last_t = ((last or run.time_origin_ns) - run.time_origin_ns) * 1e-9
+    if held < counted:
+        raise ValueError(
+            f"--resume: {files[k].name} holds {held:,} whole messages, up to t = {last_t:.4f} s, of the {counted:,} "
+            f"its checkpoint counts, at t = {run.solver.time:.4f} s: the file was cut after the checkpoint was "
+            "written, and a resumed run would leave a gap in the recording. The run cannot be resumed from this "
+            "checkpoint; gpusph-analyze --repair makes what the bag holds readable")
+    for later in files[k + 1:]:
         later.replace(later.with_name(later.name + ".superseded"))
-    whole = is_whole(files[counted])
-    if not whole or file_entries(folder, counted + 1)[-1]["count"] != recording["messages"]:
-        repair(folder, run.output.compression, keep=recording["messages"])
+    if not is_whole(files[k]) or file_entries(folder, k + 1)[-1]["count"] != counted:
+        repair(folder, run.output.compression, keep=counted)
     recorder = run.open_recording(folder, earlier=file_entries(folder))
     return run, recorder, invocation

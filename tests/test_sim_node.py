@@ -336,7 +336,7 @@ def test_save_and_load_state_go_back_to_the_same_run(client, tmp_path):
     _pause_and_reset(client)
     reply = client.call("save_state", Trigger)
     assert not reply.success and "state_file is empty" in reply.message
-    assert client.set(state_file=str(tmp_path / "state.pkl"))[0].successful
+    assert client.set(state_file=str(tmp_path / "state.npz"))[0].successful
     for _ in range(3):
         assert client.call("step", Trigger).success
     reply = client.call("save_state", Trigger)

@@ -14,9 +14,11 @@ from pathlib import Path
 
 from rclpy.serialization import serialize_message
 
-from ..runner import read_state, write_state
+from .. import state_file
 from ..sph import HealthError, NeighbourOverflow
 from .node_params import LIVE_SETTINGS
+
+NODE_STATE = "node state"  # the kind of state file ~/save_state writes (a gpusph-run checkpoint is another)
 
 
 class Session:
@@ -306,20 +308,26 @@ class Session:
             return False, f"the run failed ({self.failure}); its state is not kept; ~/reset or ~/load_state"
         state = self._held(lambda run: {"scene": run.scene.text, "settings": run.run_config.as_dict(),
                                         "run": run.checkpoint(), "t": run.solver.time})
-        return True, f"saved the state at t = {state['t']:.4f} s to {write_state(path, state)}"
+        try:
+            written = state_file.write(path, NODE_STATE, state)
+        except state_file.StateFileError as err:
+            return False, f"not saved: {err}"
+        return True, f"saved the state at t = {state['t']:.4f} s to {written}"
 
     def load_state(self, path) -> tuple:
         """(success, message): the run goes on from the state ``save_state`` wrote to ``path``, if it
         is of the same scene and settings; a recording under way is finished first (its time would
-        go back)."""
+        go back). Nothing changes when the file is not such a state."""
         if self.run is None:
             return False, "no scene is loaded: configure the node (or call ~/reset)"
         path = Path(path).expanduser()
         try:
-            state = read_state(path, ("scene", "settings", "run", "t"))
-        except ValueError as err:
+            state = state_file.read(path, NODE_STATE, ("scene", "settings", "run", "t"))
+        except state_file.StateFileError as err:
             return False, f"cannot read a state: {err}"
-        scene, settings, t = state["scene"], state["settings"], float(state["t"])
+        scene, settings, t = state["scene"], state["settings"], state["t"]
+        if not (isinstance(scene, str) and isinstance(settings, dict) and isinstance(t, float)):
+            return False, f"cannot read a state: {path} holds no scene text, settings and time"
         run = self.run
         present = run.run_config.as_dict()
         if scene != run.scene.text or settings != present:
@@ -327,16 +335,20 @@ class Session:
             what = "a different scene file" if scene != run.scene.text else "settings " + ", ".join(differ)
             return False, (f"the state in {path} is of {what}; set the parameters it was saved with and "
                            "~/reset, then load it")
-        self.stop_recording("stopped: a saved state was loaded")
 
         def load(run):
+            run.check_state(state["run"])
+            self.stop_recording("stopped: a saved state was loaded")  # its time would go back
             run.restore(state["run"])
             with self._cond:
                 self.failure, self._step_to, self._published = "", -1, run.next_output - 1
                 self._generation += 1
                 self._pace = self._window = None
 
-        self._held(load)
+        try:
+            self._held(load)
+        except (KeyError, TypeError, ValueError) as err:  # checked before the run changes
+            return False, f"cannot load the state in {path}: {err}"
         return True, f"loaded the state at t = {t:.4f} s from {path}; {self.state}"
 
     def clear(self):

@@ -24,8 +24,10 @@ unexpected error into an ERROR diagnostic; services run side by side and a ~/ste
 the solver; after shut-down every service refuses, naming the state.
 """
 import functools
+import os
 import sys
 import threading
+import time
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -459,7 +461,24 @@ def main(argv=None):
         node.session.close("interrupted")
         node.destroy_node()
         rclpy.try_shutdown()
+        _end_within(EXIT_GRACE)
     return 0
+
+
+EXIT_GRACE = 3.0  # [s] after shut-down, the longest a callback still running may hold the process
+
+
+def _end_within(seconds: float):
+    """End the process ``seconds`` from now if it has not ended by then. Python's exit waits for every
+    executor thread, and a callback still busy (a ~/reset building a large scene) would keep a node
+    that SIGINT or SIGTERM stopped alive for as long as it takes; the recording is closed by now."""
+    def end():
+        time.sleep(seconds)
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(0)
+
+    threading.Thread(target=end, name="exit", daemon=True).start()
 
 
 if __name__ == "__main__":

@@ -61,33 +61,64 @@ def _used(nl, count) -> np.ndarray:
     return np.arange(nl.max_neighbours)[None, :] < np.asarray(count)[:, None]
 
 
+def _host(solver) -> dict:
+    """{holder: {name: value}}: the plain host values a checkpoint holds."""
+    return {holder: {name: value for name, value in vars(obj).items() if _plain(value)}
+            for holder, obj in (("solver", solver), ("neighbours", solver.neighbours))}
+
+
+def _stored(solver) -> dict:
+    return {path: a for path, a in device_arrays(solver).items() if path not in NOT_STORED}
+
+
 def capture(solver) -> dict:
     """The solver's state: {"arrays": {path: numpy copy}, "host": {holder: {name: value}}}."""
     wp.synchronize_device(solver.device)
-    arrays = {path: a.numpy().copy() for path, a in device_arrays(solver).items() if path not in NOT_STORED}
+    arrays = {path: a.numpy().copy() for path, a in _stored(solver).items()}
     nl = solver.neighbours
     arrays[LISTS] = nl.nbr.numpy().reshape(nl.n, nl.max_neighbours)[_used(nl, arrays["neighbours.count"])]
-    host = {holder: {name: value for name, value in vars(obj).items() if _plain(value)}
-            for holder, obj in (("solver", solver), ("neighbours", solver.neighbours))}
-    return {"arrays": arrays, "host": host}
+    return {"arrays": arrays, "host": _host(solver)}
+
+
+def mismatch(solver, state) -> str:
+    """What in ``state`` does not fit ``solver`` (its arrays' names and shapes, the lists' length,
+    the host values' names and types), or ""."""
+    if not (isinstance(state, dict) and isinstance(state.get("arrays"), dict) and isinstance(state.get("host"), dict)):
+        return "it holds no arrays and host values"
+    arrays = _stored(solver)
+    if set(arrays) | {LISTS} != set(state["arrays"]):
+        return "its arrays are not this solver's: " + ", ".join(sorted((set(arrays) | {LISTS}) ^ set(state["arrays"])))
+    for path, target in arrays.items():
+        data = state["arrays"][path]
+        if not isinstance(data, np.ndarray) or data.shape[:target.ndim] != target.shape:  # (n,) of vectors: (n, 3)
+            return f"{path} has shape {getattr(data, 'shape', None)}, this solver's {target.shape}"
+    nl, count = solver.neighbours, state["arrays"]["neighbours.count"]
+    if count.min(initial=0) < 0 or count.max(initial=0) > nl.max_neighbours:
+        return f"neighbours.count lies outside [0, {nl.max_neighbours}]"
+    lists, used = state["arrays"][LISTS], int(count.sum())
+    if not isinstance(lists, np.ndarray) or lists.shape != (used,) or not 0 <= lists.min(initial=0) <= lists.max(
+            initial=0) < nl.n:
+        return f"{LISTS} is not {used} indices of this solver's {nl.n} particles"
+    for holder, values in _host(solver).items():
+        given = state["host"].get(holder)
+        if not isinstance(given, dict) or set(given) != set(values):
+            return f"its {holder} values are not this solver's"
+        wrong = [name for name, value in values.items()  # None stands for a value not yet known
+                 if value is not None and given[name] is not None and type(given[name]) is not type(value)]
+        if wrong:
+            return f"its {holder} values {', '.join(wrong)} are not of this solver's types"
+    return ""
 
 
 def restore(solver, state: dict):
     """Put ``state`` (``capture`` of a solver of the same configuration and particle count) into
-    ``solver``; ValueError naming what does not match."""
-    arrays = {path: a for path, a in device_arrays(solver).items() if path not in NOT_STORED}
-    if set(arrays) | {LISTS} != set(state["arrays"]):
-        raise ValueError("checkpoint: its arrays are not this solver's: " +
-                         ", ".join(sorted((set(arrays) | {LISTS}) ^ set(state["arrays"]))))
-
-    def put(paths):
-        for path in paths:
-            target, data = arrays[path], state["arrays"][path]
-            if data.shape[:target.ndim] != target.shape:  # a vector array: (n,) holding (n, 3)
-                raise ValueError(f"checkpoint: {path} has shape {data.shape}, this solver's {target.shape}")
-            wp.copy(target, wp.array(data, dtype=target.dtype, device=target.device))
-
-    put(arrays)
+    ``solver``; ValueError naming what does not match, before anything is changed."""
+    arrays = _stored(solver)
+    problem = mismatch(solver, state)
+    if problem:
+        raise ValueError(f"checkpoint: {problem}")
+    for path, target in arrays.items():
+        wp.copy(target, wp.array(state["arrays"][path], dtype=target.dtype, device=target.device))
     nl = solver.neighbours
     lists = nl.nbr.numpy().reshape(nl.n, nl.max_neighbours)
     lists[_used(nl, state["arrays"]["neighbours.count"])] = state["arrays"][LISTS]
