@@ -240,6 +240,45 @@ def test_killed_run_leaves_its_complete_chunks_readable(tmp_path):
     assert again.returncode == 0 and "is whole: nothing to repair" in again.stdout, again.stdout + again.stderr
 
 
+def test_repair_mends_a_bag_cut_at_any_point(tmp_path):
+    """A bag of 600 /clock messages in chunks of about 2 kB, cut at 10 points along its length and
+    right after its opening magic: --repair leaves each with the messages of its complete chunks,
+    the first ones of the whole bag in order, and rosbags and mcap's indexed reader open it."""
+    import shutil
+
+    from rosgraph_msgs.msg import Clock
+
+    from gpusph_ros.output.messages import clock
+    from gpusph_ros.output.recording import BagRecorder, qos_yaml, whole_messages
+
+    whole = tmp_path / "whole"
+    recorder = BagRecorder(whole, {"scene": "none"}, chunk_size=2048)
+    recorder.add_topic("/clock", "rosgraph_msgs/msg/Clock", qos_yaml())
+    for k in range(600):
+        recorder.write("/clock", clock(k * 1e-3), k * 1e-3)
+    recorder.close({"status": "completed"})
+    size = (whole / "whole_0.mcap").stat().st_size
+    recovered = []
+    for cut in [8 + 3] + [size * k // 11 for k in range(1, 11)]:
+        bag = tmp_path / f"cut_{cut}"
+        shutil.copytree(whole, bag)
+        os.rename(bag / "whole_0.mcap", bag / f"{bag.name}_0.mcap")
+        with open(bag / f"{bag.name}_0.mcap", "r+b") as f:
+            f.truncate(cut)
+        held = whole_messages(bag / f"{bag.name}_0.mcap")[0]
+        fixed = subprocess.run([sys.executable, "-m", "gpusph_ros.cli", "analyze", "--repair", str(bag)],
+                               capture_output=True, text=True, timeout=120)
+        assert fixed.returncode == 0 and f"{held} messages" in fixed.stdout, (cut, fixed.stdout + fixed.stderr)
+        with AnyReader([bag]) as reader:
+            assert reader.message_count == held
+            stamps = [deserialize_message(raw, Clock).clock for _, _, raw in reader.messages()]
+        assert [s.sec * 10 ** 9 + s.nanosec for s in stamps] == [k * 10 ** 6 for k in range(held)], cut
+        with open(bag / f"{bag.name}_0.mcap", "rb") as f:
+            assert sum(1 for _ in make_reader(f).iter_messages()) == held
+        recovered.append(held)
+    assert recovered == sorted(recovered) and recovered[0] == 0 and recovered[-1] > 450, recovered
+
+
 def test_sigterm_finishes_the_file(tmp_path):
     out = tmp_path / "stopped"
     proc = _start(out)

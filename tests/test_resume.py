@@ -2,6 +2,7 @@
 what the same run never stopped records, bit for bit on the CPU, and its bag (files _0, _1, ...)
 reads whole with rosbags and the analysis."""
 import os
+import pickle
 import signal
 import subprocess
 import sys
@@ -14,7 +15,7 @@ from rosbags.highlevel import AnyReader
 
 from gpusph_ros.analysis.bag import read
 from gpusph_ros.output.messages import cloud_arrays
-from gpusph_ros.runner import CHECKPOINT_FILE, Checkpoints, Run, resume
+from gpusph_ros.runner import CHECKPOINT_FILE, PICKLED_CHECKPOINT, Checkpoints, Run, resume
 from gpusph_ros.scenes.schema import load_scene
 from gpusph_ros.scenes.settings import resolve
 
@@ -104,9 +105,80 @@ def test_resume_refuses_what_it_cannot_continue(tmp_path):
     assert out.returncode == 1 and f"has no {CHECKPOINT_FILE}" in out.stderr, out.stderr
     (tmp_path / CHECKPOINT_FILE).write_bytes(b"not a checkpoint")
     out = _cli("--resume", str(tmp_path))
-    assert out.returncode == 1 and "cannot be read" in out.stderr and "Traceback" not in out.stderr, out.stderr
+    assert out.returncode == 1 and "not a gpusph_ros state file" in out.stderr and "Traceback" not in out.stderr, \
+        out.stderr
     out = _cli("--resume", str(tmp_path), "--set", "dx=0.01")
     assert out.returncode == 2 and "--resume DIR alone" in out.stderr, out.stderr
+
+
+class _Payload:
+    """A pickle that runs a shell command when it is loaded."""
+
+    def __init__(self, marker):
+        self.marker = marker
+
+    def __reduce__(self):
+        return os.system, (f"touch {self.marker}",)
+
+
+def _stopped_run(folder, stop_after=700):
+    """A recorded run of collapse_2d stopped between two steps with its checkpoint written; the run."""
+    scene = load_scene("collapse_2d")
+    run = Run(scene, resolve(scene, sets=SETS))
+    recorder = run.open_recording(folder)
+    asked = {"n": 0}
+
+    def stop():
+        asked["n"] += 1
+        return asked["n"] > stop_after
+
+    assert run.execute(recorder, stop=stop)["status"] == "interrupted"
+    Checkpoints(folder, {"scene": "collapse_2d", "run_config": [], "sets": SETS}, recorder, 0.0).write(run)
+    return run
+
+
+def test_a_checkpoint_carrying_code_or_cut_short_is_refused_and_runs_nothing(tmp_path):
+    """A pickle placed where --resume reads (the new checkpoint's name or the old one's) does nothing
+    and is refused saying why; so is the old format's own file, and a checkpoint cut short."""
+    marker = tmp_path / "ran"
+    payload = pickle.dumps({"invocation": _Payload(marker)}, protocol=pickle.HIGHEST_PROTOCOL)
+    for name, words in ((CHECKPOINT_FILE, "a Python pickle"), (PICKLED_CHECKPOINT, "never loads a pickle")):
+        folder = tmp_path / name.replace(".", "_")
+        folder.mkdir()
+        (folder / name).write_bytes(payload)
+        out = _cli("--resume", str(folder))
+        assert out.returncode == 1 and words in out.stderr and "Traceback" not in out.stderr, out.stderr
+        assert not marker.exists()
+    folder = tmp_path / "cut"
+    _stopped_run(folder)
+    data = (folder / CHECKPOINT_FILE).read_bytes()
+    (folder / CHECKPOINT_FILE).write_bytes(data[:len(data) // 2])
+    out = _cli("--resume", str(folder))
+    assert out.returncode == 1 and "cut short or damaged" in out.stderr and "Traceback" not in out.stderr, out.stderr
+
+
+def test_a_bag_cut_after_its_checkpoint_is_not_resumed_with_a_gap(tmp_path):
+    """The bag's file halved after the checkpoint: the resumed recording would jump in /clock from
+    where the file now ends to the checkpoint's time. --resume refuses, saying so, and leaves the
+    folder as it was; --repair then makes what the bag holds readable."""
+    folder = tmp_path / "halved"
+    run = _stopped_run(folder)
+    mcap = folder / "halved_0.mcap"
+    size = mcap.stat().st_size
+    with open(mcap, "r+b") as f:
+        f.truncate(size // 2)
+    before = sorted((p.name, p.stat().st_size) for p in folder.iterdir())
+    with pytest.raises(ValueError, match="would leave a gap in the recording") as err:
+        resume(folder)
+    assert f"at t = {run.solver.time:.4f} s" in str(err.value)
+    assert sorted((p.name, p.stat().st_size) for p in folder.iterdir()) == before
+    out = _cli("--resume", str(folder))
+    assert out.returncode == 1 and "cannot be resumed" in out.stderr and "Traceback" not in out.stderr, out.stderr
+    repaired = subprocess.run([sys.executable, "-m", "gpusph_ros.cli", "analyze", "--repair", str(folder)],
+                              capture_output=True, text=True, cwd=REPO, timeout=120)
+    assert repaired.returncode == 0 and "repaired" in repaired.stdout, repaired.stdout + repaired.stderr
+    clock = read(folder).clock
+    assert len(clock) == 0 or (np.diff(clock) > 0).all()  # what is left has no gap and no jump back
 
 
 def test_a_run_of_a_scene_file_resumes_from_another_folder(tmp_path):

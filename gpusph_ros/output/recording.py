@@ -24,7 +24,6 @@ from importlib.metadata import version
 from pathlib import Path
 
 import yaml
-from mcap.exceptions import McapError
 from mcap.records import Channel, Header, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader
 from mcap.writer import MCAP0_MAGIC, CompressionType, Writer
@@ -278,12 +277,42 @@ def write_metadata_yaml(path: Path, files: list):
     tmp.replace(path / "metadata.yaml")
 
 
+# a finished file ends with its footer record (opcode 0x02, 20 bytes) and the magic
+_FOOTER = bytes([0x02]) + (20).to_bytes(8, "little")
+_FOOTER_TAIL = len(_FOOTER) + 20 + len(MCAP0_MAGIC)
+
+
 def is_whole(file) -> bool:
-    """Whether an MCAP file was finished (it ends with the magic after its footer)."""
+    """Whether an MCAP file was finished: it ends with a footer record and the magic (a file cut
+    anywhere, even right after its opening magic, does not)."""
     file = Path(file)
+    size = file.stat().st_size
+    if size < len(MCAP0_MAGIC) + _FOOTER_TAIL:
+        return False
     with open(file, "rb") as f:
-        f.seek(max(0, file.stat().st_size - len(MCAP0_MAGIC)))
-        return f.read() == MCAP0_MAGIC
+        f.seek(size - _FOOTER_TAIL)
+        tail = f.read()
+    return tail.startswith(_FOOTER) and tail.endswith(MCAP0_MAGIC)
+
+
+def _records(f):
+    """The records of an MCAP stream up to where it is cut: a cut can fall anywhere, inside the
+    magic, a record's header or a chunk, and the MCAP reader then raises whatever its parse meets
+    (McapError, struct.error, EOFError, ...): everything before it is whole."""
+    try:
+        yield from StreamReader(f).records
+    except Exception:
+        return
+
+
+def whole_messages(file) -> tuple:
+    """(messages, the last one's log time [ns] or None) that an MCAP file holds whole, cut or not."""
+    count, last = 0, None
+    with open(file, "rb") as f:
+        for record in _records(f):
+            if isinstance(record, Message):
+                count, last = count + 1, record.log_time if last is None else max(last, record.log_time)
+    return count, last
 
 
 def repair(path, compression: str = "zstd", keep: int = None) -> dict:
@@ -302,37 +331,39 @@ def repair(path, compression: str = "zstd", keep: int = None) -> dict:
     cut = source.with_name(source.name + ".cut")
     source.replace(cut)
     topics, count, first, last = {}, 0, None, None
-    schemas, channels, result = {}, {}, False
+    schemas, channels, result, started = {}, {}, False, False
     with open(cut, "rb") as f, open(source, "wb") as out:
         writer = Writer(out, chunk_size=CHUNK_SIZE, compression=COMPRESSION[compression])
-        try:
-            for record in StreamReader(f).records:
-                if isinstance(record, Header):
-                    writer.start(record.profile, record.library)
-                elif isinstance(record, Schema) and record.id not in schemas:
-                    schemas[record.id] = (writer.register_schema(record.name, record.encoding, record.data),
-                                          record.name)
-                elif isinstance(record, Channel) and record.id not in channels:
-                    sid, type_name = schemas[record.schema_id]
-                    channels[record.id] = (writer.register_channel(record.topic, record.message_encoding, sid,
-                                                                   record.metadata), record.topic)
-                    topics[record.topic] = {"type": type_name, "count": 0,
-                                            "qos": record.metadata.get("offered_qos_profiles", qos_yaml())}
-                elif isinstance(record, Metadata):
-                    result |= record.name == "gpusph_ros.result"
-                    writer.add_metadata(record.name, record.metadata)
-                elif isinstance(record, Message):
-                    if keep is not None and count >= keep:
-                        break
-                    cid, topic = channels[record.channel_id]
-                    writer.add_message(cid, log_time=record.log_time, publish_time=record.publish_time,
-                                       data=record.data, sequence=record.sequence)
-                    topics[topic]["count"] += 1
-                    count += 1
-                    first = record.log_time if first is None else min(first, record.log_time)
-                    last = record.log_time if last is None else max(last, record.log_time)
-        except (McapError, EOFError, ValueError, KeyError, IndexError):
-            pass  # the cut: everything after the last complete chunk is lost
+        for record in _records(f):
+            if isinstance(record, Header):
+                writer.start(record.profile, record.library)
+                started = True
+            elif isinstance(record, Schema) and record.id not in schemas:
+                schemas[record.id] = (writer.register_schema(record.name, record.encoding, record.data),
+                                      record.name)
+            elif isinstance(record, Channel) and record.id not in channels:
+                if record.schema_id not in schemas:  # damaged past its cut: what follows is lost too
+                    break
+                sid, type_name = schemas[record.schema_id]
+                channels[record.id] = (writer.register_channel(record.topic, record.message_encoding, sid,
+                                                               record.metadata), record.topic)
+                topics[record.topic] = {"type": type_name, "count": 0,
+                                        "qos": record.metadata.get("offered_qos_profiles", qos_yaml())}
+            elif isinstance(record, Metadata):
+                result |= record.name == "gpusph_ros.result"
+                writer.add_metadata(record.name, record.metadata)
+            elif isinstance(record, Message):
+                if (keep is not None and count >= keep) or record.channel_id not in channels:
+                    break
+                cid, topic = channels[record.channel_id]
+                writer.add_message(cid, log_time=record.log_time, publish_time=record.publish_time,
+                                   data=record.data, sequence=record.sequence)
+                topics[topic]["count"] += 1
+                count += 1
+                first = record.log_time if first is None else min(first, record.log_time)
+                last = record.log_time if last is None else max(last, record.log_time)
+        if not started:  # cut inside its header: a file of its own kind, empty
+            writer.start("ros2", f"gpusph_ros {version('gpusph_ros')} (repaired); mcap {version('mcap')}")
         if not result:
             writer.add_metadata("gpusph_ros.result", {"status": f"killed: repaired, {count} messages recovered"})
         writer.finish()
