@@ -320,13 +320,13 @@ def plan_main(argv=None):
     try:
         scene = load_scene(args.scene)
         config = resolve(scene, files=args.run_config, sets=args.set)
-    except (ConfigError, ValueError) as err:
+        if args.no_reductions:
+            print(text(plan(scene, config, args.calibration_steps)))
+            return 0
+        plans, skipped = plan_reductions(scene, config, args.calibration_steps)
+    except (ConfigError, ValueError) as err:  # a run the machine cannot hold is refused before calibrating
         print(f"gpusph-plan: {err}", file=sys.stderr)
         return 1
-    if args.no_reductions:
-        print(text(plan(scene, config, args.calibration_steps)))
-        return 0
-    plans, skipped = plan_reductions(scene, config, args.calibration_steps)
     print(text(plans[0]))
     print("\nthe same run under each reduction of the scene (cost: estimated wall time, share of the first):")
     print(table(plans, skipped))

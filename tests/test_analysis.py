@@ -149,6 +149,30 @@ def test_every_analysis_a_scene_may_name_exists_and_a_bad_one_is_refused():
         assert err.value.field == field and words in str(err.value), str(err.value)
 
 
+def test_a_scene_that_names_an_analysis_without_what_it_reads_is_refused_before_any_run():
+    """case: dambreak1 without the probes velocity and D, or without an obstacle's pressure blocks;
+    dambreak2 without its bore column; lobovsky without a sensor or gauge: refused when the scene
+    is read, naming what the analysis needs, not after the run."""
+    from gpusph_ros.scenes.schema import ConfigError, load_scene, parse_scene
+
+    for scene, change, words in (
+            ("dambreak1_lab", {"probes": {"D": {"type": "point", "position": [0.96, 0.49, 0.026]}}},
+             "a point probe named 'velocity'"),
+            ("dambreak1_lab", {"probes": {"velocity": {"type": "gauge", "position": [0.754, 0.30]},
+                                          "D": {"type": "point", "position": [0.96, 0.49, 0.026]}}},
+             "a point probe named 'velocity'"),
+            ("dambreak1_lab", {"obstacles": []}, "first obstacle has pressure blocks at 0 and 0.06 m"),
+            ("dambreak2_010", {"probes": {"surface": {"type": "gauge", "position": [11.1, 0.8]}}},
+             "a column probe named 'bore'"),
+            ("lobovsky_2d", {"probes": {"p": {"type": "point", "position": [1.61, 0.003]}}}, "sensor_1")):
+        data = {**yaml.safe_load(load_scene(scene).text), **change}
+        with pytest.raises(ConfigError) as err:
+            parse_scene(data)
+        assert err.value.field == "analysis.case" and words in str(err.value), str(err.value)
+        del data["analysis"]
+        parse_scene(data)  # the same scene without the analysis is a scene
+
+
 def test_first_impact_integral_of_a_known_pulse():
     t = np.linspace(0.0, 3.0, 3001)
     p = np.where((t > 1.0) & (t < 1.5), 2.0, 0.0)  # starts past 0.25 at t = 1.001

@@ -139,6 +139,66 @@ def test_what_the_machine_cannot_hold_is_refused_with_the_numbers(node, tmp_path
     assert node.alive()
 
 
+class _Payload:
+    """A pickle that runs a shell command when it is loaded."""
+
+    def __init__(self, marker):
+        self.marker = marker
+
+    def __reduce__(self):
+        return os.system, (f"touch {self.marker}",)
+
+
+def test_a_state_file_carrying_code_or_naming_a_fifo_is_refused_at_once_and_blocks_nothing(node, tmp_path):
+    """~/load_state of a pickle whose loading runs a command: refused, saying why, and nothing runs.
+    state_file a FIFO: ~/load_state and ~/save_state refuse at once, twelve of them side by side,
+    while other calls answer within 2 s; then SIGINT ends the node within 5 s, its log naming no
+    traceback. A 100 kB choice value and a frame id that is no ROS name are refused quoting a
+    short prefix."""
+    import pickle
+
+    client = node.client
+    marker = tmp_path / "ran"
+    payload = tmp_path / "state.npz"
+    payload.write_bytes(pickle.dumps({"scene": _Payload(marker)}, protocol=pickle.HIGHEST_PROTOCOL))
+    assert client.set(state_file=str(payload))[0].successful
+    reply = timed(client.call, "load_state", Trigger)
+    assert not reply.success and "never loads a pickle" in reply.message, reply.message
+    assert not marker.exists()
+    fifo = tmp_path / "state.fifo"
+    os.mkfifo(fifo)
+    assert client.set(state_file=str(fifo))[0].successful
+    for name in ("load_state", "save_state"):
+        reply = timed(client.call, name, Trigger)
+        assert not reply.success and "is a FIFO, not a regular file" in reply.message, (name, reply.message)
+    answers, slow = [], []
+
+    def call(k):
+        start = time.monotonic()
+        answers.append(client.call("load_state" if k % 2 else "save_state", Trigger, timeout=10.0))
+        slow.extend([time.monotonic() - start] if time.monotonic() - start > ANSWER else [])
+
+    threads = [threading.Thread(target=call, args=(k,)) for k in range(12)]
+    for t in threads:
+        t.start()
+    assert timed(client.get, "dx")["dx"] == 0.06
+    assert timed(client.call, "set_paused", SetBool, data=True).success
+    for t in threads:
+        t.join(timeout=30.0)
+    assert len(answers) == 12 and not any(a.success for a in answers) and not slow, (answers, slow)
+    for name, value in (("kernel", "k" * 100_000), ("frame_id", "../.."), ("frame_id", "map\nbase"),
+                        ("frame_id", "\u202eworld"), ("frame_id", "1st")):
+        result, = timed(client.set, **{name: value})
+        assert not result.successful and result.reason.startswith(f"{name}: ") and len(result.reason) < 400, \
+            (name, result.reason[:400])
+    start = time.monotonic()
+    node.proc.send_signal(signal.SIGINT)
+    node.proc.wait(timeout=30.0)
+    assert time.monotonic() - start < 5.0, f"SIGINT took {time.monotonic() - start:.1f} s"
+    log = node.log.read_text()
+    assert "Traceback" not in log and max(len(line) for line in log.splitlines()) < 1000, log[-3000:]
+
+
 def test_a_step_whose_target_goes_away_answers_at_once_and_blocks_nothing(node):
     client = node.client
     for name, srv in (("set_paused", SetBool), ("step", Trigger), ("record", SetBool)):

@@ -50,6 +50,12 @@ def test_defaults_describe_a_run():
     ({"particle_fields": ["vx", "speed"]}, ["particle_fields", "'speed'", "density"]),
     ({"particle_fields": ["vx", "vx"]}, ["particle_fields", "twice"]),
     ({"frame_id": " "}, ["frame_id"]),
+    ({"frame_id": "../.."}, ["frame_id: '../..' is not a ROS frame name", "e.g. world or robot1/odom"]),
+    ({"frame_id": "map\nbase"}, ["frame_id", "not a ROS frame name"]),
+    ({"frame_id": "\u202eworld"}, ["frame_id", "not a ROS frame name"]),
+    ({"frame_id": "1st"}, ["frame_id", "none starting with a digit"]),
+    ({"frame_id": "a__b"}, ["frame_id", "no __"]),
+    ({"frame_id": "world/"}, ["frame_id", "not a ROS frame name"]),
     ({"frame_id": "w" * 10 ** 6}, ["frame_id", "1,000,000 characters", "at most 256"]),
     ({"scene": "s" * 100_000}, ["scene", "at most 4,096"]),
     ({"record_dir": "r" * 5000}, ["record_dir", "at most 4,096"]),
@@ -64,6 +70,15 @@ def test_a_bad_value_gets_a_reason_naming_the_field_and_the_allowed_values(chang
     assert reason is not None
     for word in words:
         assert word in reason, (word, reason)
+
+
+def test_a_long_value_is_quoted_by_a_short_prefix_and_ros_frame_names_pass():
+    for name, value in (("kernel", "k" * 100_000), ("boundary", "b" * 100_000),
+                        ("particle_fields", ["vx", "f" * 100_000]), ("frame_id", "w/" * 100)):
+        reason = check(_values(**{name: value}), changed={name: value})
+        assert reason.startswith(f"{name}: ") and len(reason) < 400, reason[:400]
+    for frame in ("world", "map", "robot1/odom", "_private/base_link"):
+        assert check(_values(frame_id=frame), changed={"frame_id": frame}) is None, frame
 
 
 def test_a_combination_is_checked_as_a_whole():

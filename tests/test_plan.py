@@ -59,3 +59,15 @@ def test_a_scene_is_priced_with_and_without_zones():
     proposed = [p for p in plans if p["model"] == "zones (proposed)"]
     assert len(proposed) == 1 and proposed[0]["particles"] > plans[0]["particles"]
     assert "zones (proposed)   refine: [{name: near_" in table(plans, {})
+
+
+def test_the_cli_refuses_a_run_the_machine_cannot_hold_with_its_numbers():
+    """A spacing whose run no machine here holds (10^10 particles) is a refusal with the numbers,
+    before any calibration, never a traceback."""
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-m", "gpusph_ros.cli", "plan", "dambreak1_lab", "--set", "dx=0.0005"],
+                         capture_output=True, text=True, timeout=300)
+    assert out.returncode == 1 and "Traceback" not in out.stderr, out.stderr
+    assert "gpusph-plan: dx: 0.0005 is not allowed" in out.stderr and "particles" in out.stderr, out.stderr

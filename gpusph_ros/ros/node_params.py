@@ -7,6 +7,7 @@ each entry of ``PARAMS`` and asks ``check`` before accepting a change, so a para
 """
 import dataclasses
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -15,7 +16,7 @@ from ..output.folders import folder_problem
 from ..scenes.reduce import MODELS
 from ..scenes.schema import MAX_PATH, builtin_names, load_scene
 from ..scenes.settings import COMPRESSIONS, STAMPS, resolve
-from ..sph.config import LIVE, RESET, ConfigError, SolverConfig
+from ..sph.config import LIVE, RESET, ConfigError, SolverConfig, shown
 
 # when a change takes effect: RESET (needs new particles or buffers: at the next ~/reset) and LIVE
 # (from the next step or output) as the solver's settings say, and
@@ -117,6 +118,9 @@ def _device_names() -> list:
 # the longest text a parameter takes: a path (Linux's PATH_MAX), a frame id (tf2's frames are short
 # names; a 10^6-character one was written into every message, 590 MB of recording in 6 s)
 MAX_TEXT = {"scene": MAX_PATH, "record_dir": MAX_PATH, "state_file": MAX_PATH, "frame_id": 256}
+# a frame id by the ROS name rules (rcl's topic-name tokens, tf2's frames without a leading /): tokens of
+# letters, digits and _, none starting with a digit, joined by single /; no "__" (ROS 2 reserves it)
+FRAME_ID = re.compile(r"(?!.*__)[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*")
 
 
 def _check_one(p: Param, value):
@@ -126,18 +130,19 @@ def _check_one(p: Param, value):
     if p.name == "particle_fields":
         bad = [v for v in value if v not in p.choices]
         if bad:
-            return f"particle_fields: {bad[0]!r} is not one of {', '.join(p.choices)}"
+            return f"particle_fields: {shown(bad[0])} is not one of {', '.join(p.choices)}"
         if len(set(value)) != len(value):
-            return f"particle_fields: {list(value)} names a field twice"
+            return f"particle_fields: {shown(list(value))} names a field twice"
     elif p.choices and value not in p.choices:
         hint = " (for SPS set viscosity laminar and sps true)" if (p.name, value) == ("viscosity", "sps") else ""
-        return f"{p.name}: {value!r} is not one of {', '.join(p.choices)}{hint}"
+        return f"{p.name}: {shown(value)} is not one of {', '.join(p.choices)}{hint}"
     elif p.lo is not None and not (math.isfinite(value) and p.lo <= value <= p.hi):
         return f"{p.name}: {value!r} is outside [{p.lo:g}, {p.hi:g}] ({p.description})"
     elif p.name == "device" and value not in _device_names():
         return f"device: {value!r} is not available here; the devices are {', '.join(_device_names())}"
-    elif p.name == "frame_id" and not value.strip():
-        return "frame_id: an empty frame is not allowed; e.g. world"
+    elif p.name == "frame_id" and not FRAME_ID.fullmatch(value):
+        return (f"frame_id: {shown(value)} is not a ROS frame name: names of letters, digits and _ (none starting "
+                "with a digit, no __) joined by /, e.g. world or robot1/odom")
     elif p.name == "record_dir" and value and (problem := folder_problem(value)):
         return f"record_dir: {value!r} cannot be written: {problem}"
     elif p.name == "state_file" and value and (problem := folder_problem(str(Path(value).expanduser().parent))):

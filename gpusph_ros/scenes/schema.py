@@ -474,18 +474,39 @@ def parse_scene(data, default_name: str = "scene") -> Scene:
                  description=_text("description", data.get("description", "")),
                  source=_text("source", data.get("source", "")),
                  headroom=headroom, periodic=periodic, walls=walls, wet_bed=wet_bed, obstacles=obstacles,
-                 refine=refine, probes=probes, run_settings=dict(run), analysis=_analysis(data.get("analysis")),
+                 refine=refine, probes=probes, run_settings=dict(run),
+                 analysis=_analysis(data.get("analysis"), probes, obstacles),
                  warnings=warnings)
 
 
-def _analysis(value) -> dict:
+# what each analysis reads from a recording (analysis/report.py): probes by name and the types it takes,
+# and for DamBreak 1 an obstacle with pressure blocks at its faces and 0.06 m out
+ANALYSIS_PROBES = {"dambreak1": {"velocity": ("point",), "D": ("point",)}, "dambreak2": {"bore": ("column",)},
+                   "lobovsky": {}}
+LOBOVSKY_PROBES = ("sensor_1", "sensor_2", "sensor_3", "sensor_4", "H1", "H2", "H3", "H4")
+
+
+def _analysis(value, probes, obstacles) -> dict:
     """The ``analysis:`` section: {case: one of ANALYSES, gpusph: true when the thesis's GPUSPH
-    results are of this geometry (default false)}."""
+    results are of this geometry (default false)}; refused when the scene lacks what the case's
+    analysis reads, so that a run is not made for an analysis that cannot be done."""
     if value is None:
         return {}
     value = _mapping("analysis", value, ("case", "gpusph"), required=("case",))
-    if value["case"] not in ANALYSES:
-        raise ConfigError("analysis.case", value["case"], "one of " + ", ".join(ANALYSES))
+    case = value["case"]
+    if case not in ANALYSES:
+        raise ConfigError("analysis.case", case, "one of " + ", ".join(ANALYSES))
+    kinds = {p.name: p.type for p in probes}
+    for name, types in ANALYSIS_PROBES[case].items():
+        if kinds.get(name) not in types:
+            raise ConfigError("analysis.case", case, f"a scene with a {' or '.join(types)} probe named {name!r}, "
+                              f"which the {case} analysis reads (probes here: {', '.join(kinds) or 'none'})")
+    if case == "dambreak1" and not (obstacles and {0.0, 0.06} <= set(obstacles[0].block_offsets)):
+        raise ConfigError("analysis.case", case, "a scene whose first obstacle has pressure blocks at 0 and 0.06 m "
+                          "(block_offsets), whose forces the dambreak1 analysis reads")
+    if case == "lobovsky" and not set(kinds) & set(LOBOVSKY_PROBES):
+        raise ConfigError("analysis.case", case, "a scene with a probe of the lobovsky analysis: "
+                          + ", ".join(LOBOVSKY_PROBES))
     gpusph = value.get("gpusph", False)
     if not isinstance(gpusph, bool):
         raise ConfigError("analysis.gpusph", gpusph, "true or false (the thesis's GPUSPH results are of this scene)")
