@@ -94,3 +94,17 @@ def test_energy_growth(factor, fires):
         return
     assert err is not None and err.check == "energy_growth", err
     assert err.particle == -1 and "above its start" in str(err)
+
+
+def test_a_coarse_collapse_whose_thin_surge_pairs_at_the_floor_is_not_failed():
+    """The 2D collapse at 1 cm, six particles across its column: after the surge meets the far wall
+    (t = 0.34 s) 28% of its fluid pairs in the second layer of a sheet two particles thin, 1.5-1.7 dx
+    above the floor, with the density within 7% of rho0 and the energy not growing: a healthy run,
+    which the clumping check stopped while it exempted only the first 1.5 dx (CLUMP_WALL_DX)."""
+    model = build(load_scene("collapse_2d"), dx=0.01)
+    solver = Solver(model.config, model.particles)
+    solver.advance(0.5)
+    peaks = solver.health_peaks
+    assert solver.time == pytest.approx(0.5) and solver.excluded_particles == 0
+    assert peaks["peak_clumped_fraction"] <= model.config.clump_fraction
+    assert 0.9 < peaks["min_density_ratio"] and peaks["max_density_ratio"] < 1.1 and peaks["peak_energy_growth"] < 0.01
