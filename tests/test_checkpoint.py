@@ -20,6 +20,7 @@ ZONED = {"name": "zoned", "dim": 2, "tank": [0.6, 0.32], "fluid": [{"name": "wat
     ("collapse_2d", 0.01, {}),
     ("collapse_2d", 0.01, {"viscosity": "sps", "precision": "float64"}),
     ("dambreak1_thesis", 0.06, {"boundary": "mdbc"}),
+    ("dambreak1_thesis", 0.06, {"boundary": "adami"}),
     ("dambreak1_thesis", 0.06, {"boundary": "monaghan_kajtar", "shifting": True}),
     (ZONED, 0.02, {}),
 ])

@@ -8,7 +8,8 @@ force-based walls (which bounces on them like a spring) comes to rest; then the 
 for 0.1 s and the pressure is averaged over 5 samples in the last 0.2 s.
 
 Reference: hydrostatics, p = rho0 g d. Walls: Crespo et al. 2007 (dynamic), English et al. 2021
-(mdbc), Monaghan 1994 (Lennard-Jones), Monaghan & Kajtar 2009, particle-less planes.
+(mdbc), Adami et al. 2012 (adami), Monaghan 1994 (Lennard-Jones), Monaghan & Kajtar 2009,
+particle-less planes.
 """
 import numpy as np
 import pytest
@@ -42,7 +43,8 @@ CASES = [(dim, boundary, "particles", "float32") for dim in (2, 3)
          for boundary in ("dynamic", "lennard_jones", "monaghan_kajtar")]
 CASES += [(2, "dynamic", "planes", "float32"), (3, "dynamic", "planes", "float32"),
           (2, "dynamic", "particles", "float64"), (2, "mdbc", "particles", "float64"),
-          (3, "mdbc", "particles", "float32")]
+          (3, "mdbc", "particles", "float32"), (2, "adami", "particles", "float32"),
+          (3, "adami", "particles", "float32")]
 
 
 @pytest.mark.parametrize("dim, boundary, walls, precision", CASES)

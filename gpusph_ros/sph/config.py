@@ -159,8 +159,9 @@ class Numerics:
     sps_cs: float = setting(0.12, "Smagorinsky constant (thesis Eq. 2.20)")
     sps_ci: float = setting(6.6e-3, "isotropic SPS coefficient C_I (thesis Eq. 2.19)")
     boundary: str = setting("dynamic", "boundary particle model for walls the scene builds of particles: dynamic "
-                                       "(Crespo et al. 2007), mdbc (English et al. 2021), lennard_jones (thesis "
-                                       "Eq. 2.24), monaghan_kajtar (Eq. 2.26)", choices=BOUNDARIES,
+                                       "(Crespo et al. 2007), mdbc (English et al. 2021), adami (extrapolated "
+                                       "pressure, Adami et al. 2012), lennard_jones (thesis Eq. 2.24), "
+                                       "monaghan_kajtar (Eq. 2.26)", choices=BOUNDARIES,
                             applies=RESET, node=True)
     mdbc_slip: str = setting("none", "boundary velocity under mdbc: none (the wall's, zero), no_slip or free_slip "
                                      "(DualSPHysics' SlipMode)", choices=MDBC_SLIPS, node=True)

@@ -5,6 +5,9 @@
 - elastic_energy: the work of compression per unit mass, e(rho) = int_rho0^rho p / rho'^2 drho' =
   B / rho0 ((rho / rho0)^(gamma - 1) - 1) / (gamma - 1) + B (1 / rho - 1 / rho0), the Tait law
   integrated; the energy check (health.py) adds it to the kinetic and potential energy.
+- density: the Tait law inverted, rho = rho0 (1 + p / B)^(1 / gamma), within the fluid's density
+  bounds (health.py): the density of a wall particle whose pressure a boundary model sets (mDBC,
+  extrapolated-pressure walls);
 - hydrostatic_density: the Tait law inverted at p = rho0 g d, for the initial state;
   hydrostatic_depth, the depth d at which a fluid at rest has density rho (p(rho) / (rho0 g)).
 """
@@ -32,7 +35,15 @@ def build(scalar):
         return (b / rho0 * (wp.pow(rho / rho0, gamma - scalar(1.0)) - scalar(1.0)) / (gamma - scalar(1.0))
                 + b * (scalar(1.0) / rho - scalar(1.0) / rho0))
 
-    return SimpleNamespace(pressure=pressure, elastic_energy=elastic_energy)
+    @wp.func
+    def density(pressure: scalar, rho0: scalar, b: scalar, gamma: scalar, rho_min: scalar, rho_max: scalar) -> scalar:
+        """The density whose Tait pressure is ``pressure``, within [rho_min, rho_max]."""
+        base = scalar(1.0) + pressure / b
+        if base <= scalar(0.0):
+            return rho_min
+        return wp.clamp(rho0 * wp.pow(base, scalar(1.0) / gamma), rho_min, rho_max)
+
+    return SimpleNamespace(pressure=pressure, elastic_energy=elastic_energy, density=density)
 
 
 def hydrostatic_density(depth, rho0: float, b: float, gamma: float, g: float):

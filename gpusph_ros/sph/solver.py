@@ -224,6 +224,7 @@ class Solver:
         state, half, candidate = (self.pos, self.vel, self.rho), self._half, self._candidate
         if p.coarse_stride == 1:
             self._integrate(0.5, state, self.vel, half)
+            self._walls_again(self._fields_h)
             self._forces(self._fields_h)
             self._integrate(1.0, state, self._vel_h, candidate)
         else:
@@ -257,6 +258,12 @@ class Solver:
         if every and self._launched * m // every > (self._launched - 1) * m // every:  # every `every` fine steps
             self.shepard_filter(rebuild=False)
 
+    def _walls_again(self, f):
+        """The walls set from the fluid again before a later force pass of the step, for a model that
+        sets them before every evaluation (boundaries.model: each_evaluation)."""
+        if self.boundary.each_evaluation:
+            self.boundary.before_forces(self, f)
+
     def _two_rates(self, state, half, candidate):
         """One step of the coarser levels, 2 dt, as two of the finest level, dt each, every level by
         the predictor-corrector (multirate; Params.coarse_stride). The rates at the step's start are
@@ -272,6 +279,7 @@ class Solver:
         """
         self._integrate(0.5, state, self.vel, half, FINEST_LEVEL)
         self._integrate(0.25, state, self.vel, half, COARSER_LEVELS)
+        self._walls_again(self._fields_h)
         self._forces(self._fields_h, FINEST_LEVEL)
         self._integrate(1.0, state, self._vel_h, candidate, FINEST_LEVEL)  # the fine state at t + dt
         # walls set from the fluid (mDBC) take the fine state; what the coarse walls take there, from
@@ -280,10 +288,12 @@ class Solver:
         for dst, src in zip(half, candidate):
             wp.copy(dst, src)
         self._integrate(0.5, state, self.vel, half, COARSER_LEVELS)
+        self._walls_again(self._fields_h)
         self._forces(self._fields_h)
         self._integrate(1.0, state, self._vel_h, candidate, COARSER_LEVELS)
         self._integrate(0.75, state, self._vel_h, half, COARSER_LEVELS)
         self._integrate(0.5, candidate, self._vel_c, half, FINEST_LEVEL)
+        self._walls_again(self._fields_h)
         self._forces(self._fields_h, FINEST_LEVEL)
         self._integrate(1.0, candidate, self._vel_h, candidate, FINEST_LEVEL)
 

@@ -5,6 +5,8 @@
 - ``dynamic``: boundary particles with a density by continuity, Crespo et al. 2007;
 - ``mdbc``: the same particles with the density of the fluid at their mirror image, English et
   al. 2021;
+- ``adami``: the same particles with the pressure of the fluid around them, extrapolated with the
+  force balance across the wall, Adami, Hu & Adams 2012;
 - ``planes``: particle-less walls, the fluid's mirror image integrated over the half-space.
 
 Each module owns its name, what a scene needs from it (layers, spacing), its constants, its solver
@@ -21,15 +23,16 @@ import warp as wp
 
 from .. import state
 from ..device import default_device
-from . import dynamic, lennard_jones, mdbc, monaghan_kajtar, planes
+from . import adami, dynamic, lennard_jones, mdbc, monaghan_kajtar, planes
 from .model import BoundaryModel
 
 # models of walls made of particles (the run setting ``boundary``); their ids are their places here
-PARTICLE_MODELS = (lennard_jones.MODEL, monaghan_kajtar.MODEL, dynamic.MODEL, mdbc.MODEL)
+PARTICLE_MODELS = (lennard_jones.MODEL, monaghan_kajtar.MODEL, dynamic.MODEL, mdbc.MODEL, adami.MODEL)
 NAMES = tuple(m.name for m in PARTICLE_MODELS)
 BOUNDARY_ID = {name: k for k, name in enumerate(NAMES)}
 # every wall treatment a study compares: the repulsive ones, the planes, the ones with a volume
-STUDIED = tuple(m.name for m in (lennard_jones.MODEL, monaghan_kajtar.MODEL, planes.MODEL, dynamic.MODEL, mdbc.MODEL))
+STUDIED = tuple(m.name for m in (lennard_jones.MODEL, monaghan_kajtar.MODEL, planes.MODEL, dynamic.MODEL, mdbc.MODEL,
+                                 adami.MODEL))
 _ALL = {m.name: m for m in (*PARTICLE_MODELS, planes.MODEL)}
 LENNARD_JONES = BOUNDARY_ID[lennard_jones.MODEL.name]
 FLUID, BOUNDARY = state.FLUID, state.BOUNDARY

@@ -90,7 +90,8 @@ def build(scalar):
     Grid, cell_coord, cells_around, cell_around = N.Grid, N.cell_coord, N.cells_around, N.cell_around
     S = state.build(scalar)
     Params, Fields = S.Params, S.Fields
-    eos_pressure = eos.build(scalar).pressure
+    E = eos.build(scalar)
+    eos_pressure, eos_density = E.pressure, E.density
 
     @wp.func
     def ghost_offset(p: Params, x: vec, body: int, solid_lo: wp.array(dtype=vec),
@@ -134,14 +135,6 @@ def build(scalar):
         p_g + rho0 g.d (pressure cloning; the walls do not accelerate)."""
         return eos_pressure(rho_g, p.rho0, p.eos_b, p.gamma) + p.rho0 * wp.dot(p.gravity, d)
 
-    @wp.func
-    def tait_density(p: Params, pressure: scalar) -> scalar:
-        """The density whose Tait pressure (thesis Eq. 2.12) is ``pressure``, within the fluid's bounds."""
-        base = scalar(1.0) + pressure / p.eos_b
-        if base <= scalar(0.0):
-            return p.rho_min
-        return wp.clamp(p.rho0 * wp.pow(base, scalar(1.0) / p.gamma), p.rho_min, p.rho_max)
-
     @wp.kernel(enable_backward=False, module="unique")
     def ghost_offsets(p: Params, pos: wp.array(dtype=vec), ptype: wp.array(dtype=wp.int32),
                       body: wp.array(dtype=wp.int32), solid_lo: wp.array(dtype=vec), solid_hi: wp.array(dtype=vec),
@@ -170,7 +163,8 @@ def build(scalar):
             # a slot vacated this step may still be listed (levels.py)
             if state.carries_fluid(f.ptype[j]) and same_level(p, h_g, f.hsml[j]):
                 a, rhs, u = ghost_term(p, grid, f, xg, h_g, j, a, rhs, u)
-        f.rho[i] = tait_density(p, cloned_pressure(p, ghost_density(p, a, rhs, h_g), -off))
+        f.rho[i] = eos_density(cloned_pressure(p, ghost_density(p, a, rhs, h_g), -off), p.rho0, p.eos_b, p.gamma,
+                               p.rho_min, p.rho_max)
         u_b = vec(scalar(0.0))
         if a[0, 0] > scalar(0.0):
             u_g = u / a[0, 0]

@@ -1,7 +1,7 @@
 """What a boundary model is to the rest of the package: the solver, the scene builder, the
 measurements and the studies ask it instead of branching on its name.
 
-Each model module (dynamic, mdbc, lennard_jones, monaghan_kajtar, planes) defines one
+Each model module (dynamic, mdbc, adami, lennard_jones, monaghan_kajtar, planes) defines one
 ``BoundaryModel`` as ``MODEL``; its name is the run setting ``boundary`` (``planes``: the run setting
 ``wall_planes``). The device side of a model (its pair term, its density) is in the same module;
 ``boundaries.build`` combines them for the passes.
@@ -20,6 +20,8 @@ class BoundaryModel:
     continuity = False
     # the wall pushes with a force of its own that stores energy (the census counts it)
     repulsive = False
+    # before_forces runs before every force evaluation (the half step's too), not once a step
+    each_evaluation = False
 
     def layers(self, hdx: float) -> int:
         """Layers of wall particles: a kernel support (2h) deep for walls with a volume, else one."""
@@ -38,7 +40,7 @@ class BoundaryModel:
 
     def before_forces(self, solver, fields):
         """Each step of the finest level, before its first force pass, on the state ``fields``
-        (the solver's Fields)."""
+        (the solver's Fields); with ``each_evaluation``, before every force pass."""
 
     def face_pressure(self, scalar):
         """A device pass that reads the pressure on a wall face from the wall itself, or None when
