@@ -316,3 +316,20 @@ def test_export_of_dambreak1_moves_the_measurement_by_the_analysis_alignment(tmp
     kept = t_exp - shift >= 0.0  # the points before the recording's t = 0 are left out
     assert len(got) == kept.sum() > 10
     np.testing.assert_allclose(sorted(t for t, _ in got), np.sort(t_exp[kept] - shift), atol=1e-9)
+
+
+def test_the_converged_2d_reference_reads_as_its_readme_says(reference_data):
+    """De Courcy et al. (2024)'s four sensors from the package's data/: 340, 431, 495 and 496 digitised
+    rows over t sqrt(g/H) from 2.36-2.47 to 7.0 (its README), read time-sorted with repeated stamps averaged; the
+    lowest sensor takes the first and hardest impact, the highest the least load."""
+    from gpusph_ros.analysis.reference import DECOURCY, decourcy_pressures
+
+    series = decourcy_pressures(reference_data)
+    for k, rows in zip((1, 2, 3, 4), (340, 431, 495, 496)):
+        raw = np.loadtxt(reference_data / DECOURCY / f"decourcy_pressure_sensor_P{k}.csv", delimiter=",", skiprows=1)
+        t, p = series[k]
+        assert len(raw) == rows and np.all(np.diff(t) > 0) and len(t) <= rows
+        assert 2.36 <= t[0] < 2.47 and 6.9 < t[-1] < 7.05 and np.isfinite(p).all()
+    impulse = {k: float(np.sum(0.5 * (p[1:] + p[:-1]) * np.diff(t))) for k, (t, p) in series.items()}
+    assert impulse[1] > impulse[2] > impulse[3] > impulse[4] > 0
+    assert decourcy_pressures(None) is None

@@ -100,6 +100,7 @@ def gpusph_series(data, table: str, column: str, scenario: int):
 
 
 LOBOVSKY = Path("lobovsky_2014_dambreak")
+DECOURCY = Path("decourcy_2024_dambreak_2d_converged")
 
 
 def lobovsky_pressures(data):
@@ -116,6 +117,22 @@ def lobovsky_pressures(data):
         if number.isdigit():
             d = np.loadtxt(path, comments="#")
             out[int(number)] = (d[:, 0], d[:, 1])
+    return out
+
+
+def decourcy_pressures(data):
+    """De Courcy et al. (2024)'s converged 2D delta-SPH wall pressures (H/400) on Lobovsky's geometry,
+    by sensor (P1-P4 at H/100, H/20, H/10, 0.267 H: Lobovsky's sensors 1-4): {1: (t sqrt(g/H),
+    p / (rho g H)), ...}, time-sorted with the digitisation's repeated stamps averaged. None without
+    data."""
+    if data is None or not (data / DECOURCY).is_dir():
+        return None
+    out = {}
+    for k in (1, 2, 3, 4):
+        d = np.loadtxt(data / DECOURCY / f"decourcy_pressure_sensor_P{k}.csv", delimiter=",", skiprows=1)
+        t, inverse = np.unique(d[:, 0], return_inverse=True)
+        p = np.bincount(inverse, weights=d[:, 1]) / np.bincount(inverse)
+        out[k] = (t, p)
     return out
 
 

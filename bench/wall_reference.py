@@ -1,0 +1,118 @@
+"""Wall pressure against a converged 2D reference: Lobovsky et al. (2014)'s dam break in 2D
+(``lobovsky_2d``) against De Courcy et al. (2024)'s delta-SPH at H/400 on the same geometry
+(data/decourcy_2024_dambreak_2d_converged), under each wall treatment and spacing.
+
+Each run goes to t sqrt(g/H) = 6.5 with the four sensors at H/100, H/20, H/10 and 0.267 H on the
+downstream wall, faces H/71.4 tall (8.4 mm at the reference's H = 0.6 m, 4.2 mm here), sampled at
+2 kHz. Per sensor, the pressure-time integral of p / (rho g H) over t sqrt(g/H) in [2.3, 3.3] (the
+first impact), [3.3, 4.5] (after it) and [4.5, 6.5] (the flow along the wall), against the
+reference's over the same windows; the reading clipped at 0 as the reference clips it (its README);
+and the onset, when P1 first passes 0.25 rho g H (analysis.metrics.first_impact), against the
+reference's. One row per run is appended to the CSV as it ends; a run already there is skipped.
+
+    python bench/wall_reference.py [--boundary dynamic mdbc adami] [--per-h 60 120] [--out CSV]
+"""
+import argparse
+import csv
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from series import run_series
+
+REPO = Path(__file__).resolve().parents[1]
+WINDOWS = ((2.3, 3.3), (3.3, 4.5), (4.5, 6.5))
+END = 6.5  # [t sqrt(g/H)]
+HEIGHTS = (0.01, 0.05, 0.1, 0.8 / 3)  # [H] the reference's P1-P4 (its README)
+FACE = 8.4 / 600  # [H] the reference's sensor face
+RATE = 2000.0  # [Hz] samples
+
+
+def scene(depth_scene="lobovsky_2d"):
+    """lobovsky_2d with the reference's four sensors and no level gauges."""
+    from gpusph_ros.scenes.schema import load_scene, parse_scene
+
+    data = yaml.safe_load(load_scene(depth_scene).text)
+    H, L = data["depth"], data["tank"][0]
+    data["probes"] = {f"sensor_{k + 1}": {"type": "pressure_sensor", "position": [L, z * H], "normal": [-1, 0],
+                                          "diameter": FACE * H} for k, z in enumerate(HEIGHTS)}
+    data["analysis"] = {"case": "lobovsky"}
+    return parse_scene(data), H
+
+
+def impulse(t, p, lo, hi):
+    """The trapezoid integral of p over [lo, hi] of a series interpolated onto a fine grid."""
+    grid = np.linspace(lo, hi, 2001)
+    values = np.interp(grid, t, p)
+    return float(np.sum(0.5 * (values[1:] + values[:-1]) * np.diff(grid)))
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--boundary", nargs="+", default=["dynamic", "mdbc", "adami"])
+    parser.add_argument("--per-h", type=int, nargs="+", default=[60], help="H / dx of each run")
+    parser.add_argument("--out", type=Path, default=REPO / "docs/results/wall_reference.csv")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="more run settings")
+    args = parser.parse_args()
+    sys.path.insert(0, str(REPO))
+    from gpusph_ros.analysis import metrics as M
+    from gpusph_ros.analysis.reference import data_dir, decourcy_pressures
+
+    reference = decourcy_pressures(data_dir())
+    sc, H = scene()
+    g = 9.81
+    t_unit, p_unit = np.sqrt(g / H), 1000.0 * g * H
+    extra = {k: yaml.safe_load(v) for k, v in (s.split("=", 1) for s in args.set)}
+    done = set()
+    if args.out.exists():
+        with open(args.out) as f:
+            done = {(r["boundary"], int(r["per_h"]), r["settings"]) for r in csv.DictReader(f)}
+    ref_onset = M.first_impact(*reference[1])[0]
+    ref = {k: [impulse(*reference[k], lo, hi) for lo, hi in WINDOWS] for k in (1, 2, 3, 4)}
+    print("reference (De Courcy et al. 2024, H/400) impulses per window:",
+          "; ".join(f"P{k} " + " / ".join(f"{v:.3f}" for v in ref[k]) for k in ref), f"onset {ref_onset:.3f}")
+    for per_h in args.per_h:
+        for boundary in args.boundary:
+            settings = " ".join(args.set)
+            if (boundary, per_h, settings) in done:
+                continue
+            start = time.perf_counter()
+            rec = run_series(sc, dx=H / per_h, boundary=boundary, end_time=(END + 0.02) / t_unit, output_rate=RATE,
+                             particle_rate=0.0, **extra)
+            wall = time.perf_counter() - start
+            s = rec["series"]
+            t = np.asarray(s["t"]) * t_unit
+            row = {"boundary": boundary, "per_h": per_h, "settings": settings, "dx": H / per_h,
+                   "particles": rec.get("particles"), "steps": rec.get("steps"), "wall_s": round(wall, 1),
+                   "status": rec.get("status", "")[:120]}
+            onset = float("nan")
+            for k in (1, 2, 3, 4):
+                p = np.asarray(s[f"sensors/sensor_{k}"]) / p_unit
+                if k == 1 and len(t):
+                    onset = M.first_impact(t, p)[0]
+                for w, (lo, hi) in enumerate(WINDOWS):
+                    for name, series in (("", p), ("clipped_", np.maximum(p, 0.0))):
+                        value = impulse(t, series, lo, hi) if len(t) and t[-1] >= hi else float("nan")
+                        row[f"{name}P{k}_w{w + 1}"] = round(value, 4)
+                        row[f"{name}P{k}_w{w + 1}_err_pct"] = round(100.0 * (value / ref[k][w] - 1.0), 1)
+                row[f"P{k}_peak"] = round(float(p.max()), 3) if len(p) else float("nan")
+            row["onset"] = round(onset, 3)
+            row["onset_shift"] = round(onset - ref_onset, 3)
+            new = not args.out.exists()
+            args.out.parent.mkdir(parents=True, exist_ok=True)
+            with open(args.out, "a", newline="") as f:
+                writer = csv.DictWriter(f, fieldnames=list(row))
+                if new:
+                    writer.writeheader()
+                writer.writerow(row)
+            cells = [" / ".join(f"{row.get(f'clipped_P{k}_w{w}_err_pct', float('nan')):+.0f}" for w in (1, 2, 3))
+                     for k in (1, 2, 3, 4)]
+            print(f"{boundary:8s} H/{per_h}: {wall:6.0f} s, {row['status'][:40]}; clipped windows P1-P4: "
+                  f"{' | '.join(cells)}; onset {row['onset_shift']:+.3f}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
