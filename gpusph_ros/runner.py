@@ -20,10 +20,9 @@ import numpy as np
 import yaml
 from std_msgs.msg import String
 
-from . import state_file
 from .measure import cloud
 from .measure.suite import Measurements
-from .output import frames, markers, messages
+from .output import frames, markers, messages, state_file
 from .scenes.build import build_run
 from .sph import checkpoint
 

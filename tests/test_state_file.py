@@ -1,4 +1,4 @@
-"""The saved state's file (gpusph_ros/state_file.py): data that cannot run code. What is written
+"""The saved state's file (gpusph_ros/output/state_file.py): data that cannot run code. What is written
 reads back equal, type for type; numpy reads it as an .npz without pickle; a pickle (what earlier
 versions wrote), a file cut anywhere, a FIFO, a folder, another kind of state, compressed or
 object members are each refused with the reason, and nothing a file holds is ever run."""
@@ -10,8 +10,8 @@ import zipfile
 import numpy as np
 import pytest
 
-from gpusph_ros import state_file
-from gpusph_ros.state_file import StateFileError
+from gpusph_ros.output import state_file
+from gpusph_ros.output.state_file import StateFileError
 
 pytestmark = pytest.mark.unit
 

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from rclpy.serialization import serialize_message
 
-from .. import state_file
+from ..output import state_file
 from ..sph import HealthError, NeighbourOverflow
 from .node_params import LIVE_SETTINGS
 
