@@ -33,7 +33,7 @@ def test_search_for_the_smallest_stable_value_and_the_ends():
 
 def test_combinations_and_their_settings():
     combos = st.combinations()
-    assert len(combos) == 3 * 3 * 5 * 3 * 2 * 2 == 540
+    assert len(combos) == 3 * 3 * 6 * 3 * 2 * 2 == 648  # kernels, viscosities, walls, densities, shifting, XSPH
     planes = st.Combination("wendland", "sps", "planes", "shepard", xsph="on").settings()
     assert planes == {"kernel": "wendland", "viscosity": "sps", "density_diffusion": "none", "shepard_every": 40,
                       "shifting": False, "xsph": True, "wall_planes": True}

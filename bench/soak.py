@@ -1,0 +1,239 @@
+"""A soak of sim_node: a node stepping collapse_2d at 2 cm for --minutes, driven by one client that
+makes a call at random every --period seconds (about) of every kind a user or a hostile client makes:
+parameter gets, live and reset parameter sets, refused values (a 100 kB choice, a frame id that is no
+ROS name, an out-of-range number), ~/set_paused, ~/step, ~/record on and off, ~/reset, ~/save_state
+and ~/load_state (of the state saved, of a FIFO, of a pickle that carries code) and lifecycle
+deactivate / activate. Every call has 2 s to answer.
+
+Every --sample seconds it samples the node's resident memory, open files and threads from /proc;
+each bag the node has closed is opened with rosbags and its messages counted against its index
+(then deleted, so a long soak does not fill the disk). At the end the node is stopped with SIGINT.
+
+Writes ``soak.csv`` (the samples), ``soak_calls.csv`` (each call: time, kind, latency, answered) and
+``soak.md`` (the summary: RSS growth per minute after the first 5 minutes by a least-squares line,
+the latencies' median, 99th percentile and worst per kind, calls unanswered within 2 s, bags read)
+under --out. Exit status 0 when RSS grows under 1 MB a minute after 5 minutes, every call answers
+within 2 s and every bag reads whole, else 1.
+
+    python bench/soak.py [--minutes 30] [--out docs/results/soak] [--seed 1]
+"""
+import argparse
+import csv
+import os
+import pickle
+import random
+import shutil
+import signal
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+BENCH = Path(__file__).resolve().parent
+sys.path.insert(0, str(BENCH.parent / "tests"))
+ANSWER = 2.0  # [s] the longest a call may take
+WARM_UP = 5.0  # [min] RSS growth is fitted after this
+
+
+class _Payload:
+    """A pickle that runs a command when loaded: the node must refuse it and run nothing."""
+
+    def __init__(self, marker):
+        self.marker = marker
+
+    def __reduce__(self):
+        return os.system, (f"touch {self.marker}",)
+
+
+def _proc(pid: int) -> dict:
+    status = Path(f"/proc/{pid}/status").read_text().splitlines()
+    fields = dict(line.split(":", 1) for line in status if ":" in line)
+    return {"rss_mb": int(fields["VmRSS"].split()[0]) / 1024.0, "threads": int(fields["Threads"]),
+            "fds": len(os.listdir(f"/proc/{pid}/fd"))}
+
+
+def _check_closed_bags(folder: Path, keep_open: bool) -> list:
+    """(bag, messages, whole) for each bag under ``folder`` whose file is finished (all of them when
+    not ``keep_open``); each is read with rosbags, then deleted."""
+    from rosbags.highlevel import AnyReader
+
+    from gpusph_ros.output.recording import bag_files, is_whole
+
+    out = []
+    for bag in sorted(p for p in folder.iterdir() if p.is_dir()):
+        files = bag_files(bag)
+        if not files or (keep_open and not all(is_whole(f) for f in files)):
+            continue
+        try:
+            with AnyReader([bag]) as reader:
+                count = sum(1 for _ in reader.messages())
+                whole = count == reader.message_count and all(is_whole(f) for f in files)
+        except Exception as err:  # a bag that does not read is the finding
+            print(f"  bag {bag.name} does not read: {type(err).__name__}: {err}", flush=True)
+            count, whole = 0, False
+        out.append((bag.name, count, whole))
+        shutil.rmtree(bag)
+    return out
+
+
+def soak(minutes: float, out: Path, seed: int, period: float, sample: float) -> int:
+    from lifecycle_msgs.msg import Transition
+    from lifecycle_msgs.srv import ChangeState
+    from std_srvs.srv import SetBool, Trigger
+
+    from ros_client import Client
+
+    rng = random.Random(seed)
+    work = Path(tempfile.mkdtemp(prefix="soak_"))
+    bags, saved = work / "bags", work / "state.npz"
+    bags.mkdir()
+    fifo, poison, marker = work / "state.fifo", work / "poison.npz", work / "ran"
+    os.mkfifo(fifo)
+    poison.write_bytes(pickle.dumps({"scene": _Payload(marker)}))
+    domain = 200 + os.getpid() % 30
+    env = {**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
+           "PYTHONUNBUFFERED": "1"}
+    log = open(work / "node.log", "w")
+    node = subprocess.Popen([sys.executable, "-m", "gpusph_ros.ros.sim_node", "--ros-args", "-p", "scene:=collapse_2d",
+                             "-p", "dx:=0.02", "-p", "end_time:=100000.0", "-p", "real_time_factor:=1.0",
+                             "-p", f"record_dir:={bags}", "-p", f"state_file:={saved}"],
+                            env=env, stdout=log, stderr=subprocess.STDOUT)
+    client = Client(domain)
+    calls, samples, read = [], [], []
+
+    def lifecycle(label):
+        ids = {"deactivate": Transition.TRANSITION_DEACTIVATE, "activate": Transition.TRANSITION_ACTIVATE}
+        return client.call("change_state", ChangeState, timeout=ANSWER, transition=Transition(id=ids[label]))
+
+    def load(path):
+        def call():
+            client.set(state_file=str(path))
+            reply = client.call("load_state", Trigger, timeout=ANSWER)
+            client.set(state_file=str(saved))
+            return reply
+        return call
+
+    kinds = {
+        "get": lambda: client.get("cfl", "scene", "output_rate", "frame_id"),
+        "set cfl": lambda: client.set(cfl=rng.choice([0.2, 0.25, 0.3])),
+        "set output_rate": lambda: client.set(output_rate=rng.choice([0.0, 20.0, 50.0])),
+        "set particle_fields": lambda: client.set(particle_fields=rng.choice([["vx", "density"], ["pressure"]])),
+        "set frame_id": lambda: client.set(frame_id=rng.choice(["world", "map"])),
+        "set dx (reset)": lambda: client.set(dx=rng.choice([0.02, 0.025])),
+        "refused value": lambda: client.set(**rng.choice([{"kernel": "k" * 100_000}, {"frame_id": "../.."},
+                                                          {"cfl": 7.0}, {"compression": "gzip"}])),
+        "set_paused": lambda: client.call("set_paused", SetBool, timeout=ANSWER, data=rng.random() < 0.5),
+        "step": lambda: client.call("step", Trigger, timeout=ANSWER),
+        "record": lambda: client.call("record", SetBool, timeout=ANSWER, data=rng.random() < 0.6),
+        "reset": lambda: client.call("reset", Trigger, timeout=ANSWER),
+        "save_state": lambda: client.call("save_state", Trigger, timeout=ANSWER),
+        "load_state": lambda: client.call("load_state", Trigger, timeout=ANSWER),
+        "load_state fifo": load(fifo),
+        "load_state pickle": load(poison),
+        "lifecycle": lambda: lifecycle(rng.choice(["deactivate", "activate"])),
+    }
+    try:
+        deadline = time.monotonic() + 300
+        while node.poll() is None and time.monotonic() < deadline:  # up and stepping
+            try:
+                if "collapse_2d" in client.call("reset", Trigger, timeout=10.0).message:
+                    break
+            except TimeoutError:
+                pass
+        for name, srv in (("set_paused", SetBool), ("step", Trigger), ("record", SetBool), ("reset", Trigger),
+                          ("save_state", Trigger), ("load_state", Trigger), ("change_state", ChangeState)):
+            client.call(name, srv, timeout=30.0, **({"data": False} if srv is SetBool else {}))
+        start = time.monotonic()
+        end, next_sample = start + 60.0 * minutes, start
+        print(f"soak: sim_node pid {node.pid}, collapse_2d at 2 cm, {minutes:g} min, a call about every "
+              f"{period:g} s, samples every {sample:g} s -> {out}", flush=True)
+        while time.monotonic() < end and node.poll() is None:
+            now = time.monotonic()
+            if now >= next_sample:
+                row = {"minute": (now - start) / 60.0, **_proc(node.pid)}
+                samples.append(row)
+                read += _check_closed_bags(bags, keep_open=True)
+                next_sample += sample
+                print(f"  {row['minute']:6.2f} min  RSS {row['rss_mb']:7.1f} MB  fds {row['fds']:3d}  threads "
+                      f"{row['threads']:3d}  calls {len(calls)}  bags read {len(read)}", flush=True)
+            kind = rng.choice(list(kinds))
+            t0 = time.monotonic()
+            try:
+                kinds[kind]()
+                answered = True
+            except TimeoutError:
+                answered = False
+            calls.append({"minute": (t0 - start) / 60.0, "kind": kind, "latency_s": time.monotonic() - t0,
+                          "answered": answered})
+            time.sleep(rng.uniform(0.0, 2.0 * period))
+        alive = node.poll() is None
+        if alive:
+            client.call("record", SetBool, timeout=10.0, data=False)
+    finally:
+        client.close()
+        if node.poll() is None:
+            node.send_signal(signal.SIGINT)
+            try:
+                node.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                node.kill()
+        log.close()
+    read += _check_closed_bags(bags, keep_open=False)
+    return _report(out, minutes, samples, calls, read, alive, marker.exists(), work)
+
+
+def _report(out: Path, minutes, samples, calls, read, alive, ran, work) -> int:
+    out.mkdir(parents=True, exist_ok=True)
+    for name, rows in (("soak.csv", samples), ("soak_calls.csv", calls)):
+        with open(out / name, "w", newline="") as f:
+            writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+            writer.writeheader()
+            writer.writerows(rows)
+    late = [s for s in samples if s["minute"] >= WARM_UP]
+    slope = float("nan")
+    if len(late) >= 2:
+        xs, ys = [s["minute"] for s in late], [s["rss_mb"] for s in late]
+        mx, my = statistics.fmean(xs), statistics.fmean(ys)
+        slope = sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sum((x - mx) ** 2 for x in xs)
+    unanswered = [c for c in calls if not c["answered"]]
+    slow = [c for c in calls if c["latency_s"] > ANSWER]
+    broken = [b for b in read if not b[2]]
+    lines = [f"# sim_node soak: {minutes:g} minutes", "",
+             "`python bench/soak.py --minutes %g` (collapse_2d at 2 cm, real_time_factor 1, recording on and "
+             "off at random; one client, a call about every 0.5 s). The node's log: %s." % (minutes, work / "node.log"),
+             "", f"- node alive at the end: {alive}; the pickle's command ran: {ran}",
+             f"- calls: {len(calls)}; unanswered within {ANSWER:g} s: {len(unanswered)}; slower than {ANSWER:g} s: "
+             f"{len(slow)}",
+             f"- RSS: {samples[0]['rss_mb']:.1f} MB at the start, {samples[-1]['rss_mb']:.1f} MB at the end; "
+             f"growth after the first {WARM_UP:g} minutes {slope:+.3f} MB/min (least squares over "
+             f"{len(late)} samples)",
+             f"- open files {min(s['fds'] for s in samples)}-{max(s['fds'] for s in samples)}, threads "
+             f"{min(s['threads'] for s in samples)}-{max(s['threads'] for s in samples)}",
+             f"- bags read with rosbags: {len(read)}, {sum(b[1] for b in read):,} messages; not whole or not "
+             f"readable: {len(broken)}", "", "| call | n | median ms | p99 ms | worst ms |",
+             "| --- | --- | --- | --- | --- |"]
+    for kind in sorted({c["kind"] for c in calls}):
+        ms = sorted(1e3 * c["latency_s"] for c in calls if c["kind"] == kind)
+        p99 = ms[min(len(ms) - 1, int(0.99 * len(ms)))]
+        lines.append(f"| {kind} | {len(ms)} | {statistics.median(ms):.0f} | {p99:.0f} | {ms[-1]:.0f} |")
+    (out / "soak.md").write_text("\n".join(lines) + "\n")
+    print("\n".join(lines))
+    ok = alive and not ran and not unanswered and not slow and not broken and slope < 1.0
+    return 0 if ok else 1
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--minutes", type=float, default=30.0)
+    parser.add_argument("--out", type=Path, default=Path("runs/soak"))
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--period", type=float, default=0.5, help="mean seconds between two calls")
+    parser.add_argument("--sample", type=float, default=10.0, help="seconds between two samples of the node")
+    args = parser.parse_args()
+    sys.exit(soak(args.minutes, args.out, args.seed, args.period, args.sample))
+
+
+if __name__ == "__main__":
+    main()
