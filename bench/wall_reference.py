@@ -6,7 +6,8 @@ Each run goes to t sqrt(g/H) = 6.5 with the four sensors at H/100, H/20, H/10 an
 downstream wall, faces H/71.4 tall (8.4 mm at the reference's H = 0.6 m, 4.2 mm here), sampled at
 2 kHz. Per sensor, the pressure-time integral of p / (rho g H) over t sqrt(g/H) in [2.3, 3.3] (the
 first impact), [3.3, 4.5] (after it) and [4.5, 6.5] (the flow along the wall), against the
-reference's over the same windows; the reading clipped at 0 as the reference clips it (its README);
+reference's over the same windows; the reading clipped at 0 as the reference clips it (its
+README; ``--reading smoothed`` reads the sensors as the reference reads its own, measure/sensors.py);
 and the onset, when P1 first passes 0.25 rho g H (analysis.metrics.first_impact), against the
 reference's. One row per run is appended to the CSV as it ends; a run already there is skipped.
 
@@ -31,14 +32,15 @@ FACE = 8.4 / 600  # [H] the reference's sensor face
 RATE = 2000.0  # [Hz] samples
 
 
-def scene(depth_scene="lobovsky_2d"):
-    """lobovsky_2d with the reference's four sensors and no level gauges."""
+def scene(reading="wall", depth_scene="lobovsky_2d"):
+    """lobovsky_2d with the reference's four sensors, read as ``reading`` says (measure/sensors.py),
+    and no level gauges."""
     from gpusph_ros.scenes.schema import load_scene, parse_scene
 
     data = yaml.safe_load(load_scene(depth_scene).text)
     H, L = data["depth"], data["tank"][0]
     data["probes"] = {f"sensor_{k + 1}": {"type": "pressure_sensor", "position": [L, z * H], "normal": [-1, 0],
-                                          "diameter": FACE * H} for k, z in enumerate(HEIGHTS)}
+                                          "diameter": FACE * H, "reading": reading} for k, z in enumerate(HEIGHTS)}
     data["analysis"] = {"case": "lobovsky"}
     return parse_scene(data), H
 
@@ -56,13 +58,15 @@ def main():
     parser.add_argument("--per-h", type=int, nargs="+", default=[60], help="H / dx of each run")
     parser.add_argument("--out", type=Path, default=REPO / "docs/results/wall_reference.csv")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="more run settings")
+    parser.add_argument("--reading", choices=["wall", "smoothed"], default="wall",
+                        help="how the sensors read (smoothed: as the reference reads its own)")
     args = parser.parse_args()
     sys.path.insert(0, str(REPO))
     from gpusph_ros.analysis import metrics as M
     from gpusph_ros.analysis.reference import data_dir, decourcy_pressures
 
     reference = decourcy_pressures(data_dir())
-    sc, H = scene()
+    sc, H = scene(args.reading)
     g = 9.81
     t_unit, p_unit = np.sqrt(g / H), 1000.0 * g * H
     extra = {k: yaml.safe_load(v) for k, v in (s.split("=", 1) for s in args.set)}
@@ -76,7 +80,7 @@ def main():
           "; ".join(f"P{k} " + " / ".join(f"{v:.3f}" for v in ref[k]) for k in ref), f"onset {ref_onset:.3f}")
     for per_h in args.per_h:
         for boundary in args.boundary:
-            settings = " ".join(args.set)
+            settings = " ".join(args.set + ([f"reading={args.reading}"] if args.reading != "wall" else []))
             if (boundary, per_h, settings) in done:
                 continue
             start = time.perf_counter()

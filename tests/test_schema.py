@@ -107,6 +107,9 @@ def test_good_scene_parses_into_three_vectors():
     (("probes", "col", "position"), [5.0, 0.25], "probes.col.position", "inside the tank"),
     (("probes", "prof", "heights"), "low", "probes.prof.heights", "a list of heights"),
     (("probes", "u", "heights"), [0.1], "probes.u.heights", "only profile probes"),
+    (("probes", "u", "reading"), "smoothed", "probes.u.reading", "only pressure_sensor probes"),
+    (("probes", "p"), {"type": "pressure_sensor", "position": [1.0, 0.25, 0.1], "normal": [-1, 0, 0],
+                       "reading": "averaged"}, "probes.p.reading", "one of wall, smoothed"),
     (("colour",), "blue", "colour", "the fields are name, description"),
 ])
 def test_bad_field_is_named_with_what_is_allowed(path, value, field, allowed):

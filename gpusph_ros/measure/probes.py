@@ -23,16 +23,17 @@ def build(scalar):
     K = kernels.build(scalar)
     kernel_w, smoothing = K.w, K.smoothing
     N = neighbours.grid(scalar)
-    Grid, separation, cell_coord, cells_around, cell_around = (N.Grid, N.separation, N.cell_coord, N.cells_around,
-                                                                N.cell_around)
+    Grid, separation, cell_coord, neighbour_cell = N.Grid, N.separation, N.cell_coord, N.neighbour_cell
     S = state.build(scalar)
     Params, Fields = S.Params, S.Fields
 
     @wp.kernel(enable_backward=False, module="unique")
     def interpolate(p: Params, grid: Grid, start: wp.array(dtype=wp.int32), end: wp.array(dtype=wp.int32),
-                    order: wp.array(dtype=wp.int32), f: Fields, points: wp.array(dtype=vec),
+                    order: wp.array(dtype=wp.int32), f: Fields, points: wp.array(dtype=vec), widen: int,
                     vel: wp.array(dtype=vec), pressure: wp.array(dtype=scalar), rho: wp.array(dtype=scalar),
                     weight: wp.array(dtype=scalar)):
+        """The Shepard interpolation at each point with each particle's kernel ``widen`` times as
+        wide (1: the run's own), over the cells that kernel reaches."""
         k = wp.tid()
         x = points[k]
         ci = cell_coord(grid, x)
@@ -40,15 +41,25 @@ def build(scalar):
         pr = scalar(0.0)
         r = scalar(0.0)
         wsum = scalar(0.0)
-        for c in range(cells_around(grid)):
-            cell = cell_around(grid, ci, c)
-            if cell >= 0:
-                for s in range(start[cell], end[cell]):
-                    b = order[s]
-                    if f.ptype[b] == FLUID:
+        wide = scalar(widen)
+        wide_norm = wide * wide
+        if p.dim == 3:
+            wide_norm = wide_norm * wide
+        reach, reach_z = grid.reach * widen, grid.reach_z * widen
+        for cz in range(-reach_z, reach_z + 1):
+            for cy in range(-reach, reach + 1):
+                for cx in range(-reach, reach + 1):
+                    cell = neighbour_cell(grid, ci, cx, cy, cz)
+                    if cell < 0:
+                        continue
+                    for s in range(start[cell], end[cell]):
+                        b = order[s]
+                        if f.ptype[b] != FLUID:
+                            continue
                         # each particle's own kernel (scatter form) where spacings differ
                         h, inv_h, norm, scale = smoothing(p, f.hsml[b], f.hsml[b])
-                        w = kernel_w(p.kernel, norm, inv_h, wp.length(separation(grid, x, f.pos[b])))
+                        w = kernel_w(p.kernel, norm / wide_norm, inv_h / wide,
+                                     wp.length(separation(grid, x, f.pos[b])))
                         wv = w * f.mass[b] / f.rho[b]
                         u += wv * f.vel[b]
                         pr += wv * f.pressure[b]
@@ -68,10 +79,13 @@ def build(scalar):
 
 
 class PointProbes:
-    """Probes at fixed points of one solver. ``sample()`` returns host arrays."""
+    """Probes at fixed points of one solver, each particle's kernel ``widen`` times the run's (2: a
+    sensor that reads as De Courcy et al. 2024 read theirs: sensors.py). ``sample()`` returns host
+    arrays."""
 
-    def __init__(self, solver, points):
+    def __init__(self, solver, points, widen: int = 1):
         self.solver = solver
+        self.widen = int(widen)
         pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
         dev = solver.device
         self._interpolate = build(solver.scalar)
@@ -87,7 +101,7 @@ class PointProbes:
         probe, whose other values are then 0)."""
         params, fields, nl = self.solver.measurement_view()
         wp.launch(self._interpolate, dim=self.points.shape[0],
-                  inputs=[params, nl.grid, nl.cell_start, nl.cell_end, nl.order, fields, self.points, self._vel,
-                          self._pressure, self._rho, self._weight], device=self.solver.device)
+                  inputs=[params, nl.grid, nl.cell_start, nl.cell_end, nl.order, fields, self.points, self.widen,
+                          self._vel, self._pressure, self._rho, self._weight], device=self.solver.device)
         return {"vel": self._vel.numpy().astype(np.float64), "pressure": self._pressure.numpy().astype(np.float64),
                 "rho": self._rho.numpy().astype(np.float64), "weight": self._weight.numpy().astype(np.float64)}

@@ -28,6 +28,12 @@ the boundary particles' own noise that the net force on them carries (forces.py)
 Under mDBC (sph/boundaries/mdbc.py) the wall's own pressure is usable and no offset is needed: each face point
 reads the boundary's pressure, mDBC's first-order extrapolation of the fluid from the ghost node of
 the first boundary layer (dx/2 in front of the face) evaluated at the face (``WallPressure``).
+
+A sensor's ``reading: smoothed`` reads as De Courcy et al. (2024) read the converged 2D reference
+(data/decourcy_2024_dambreak_2d_converged, its README) and as TrixiParticles' validation does: at
+each point of the face itself the fluid's Shepard pressure with a kernel of twice the run's smoothing
+length (``SMOOTHED_WIDEN``; it reaches 4 h into the fluid), negative pressures clipped to zero, 0
+where dry (``smoothed_face_pressure``). It reads any wall treatment the same way.
 """
 import math
 
@@ -38,6 +44,7 @@ from ..sph import boundaries, levels
 from .probes import PointProbes
 
 OFFSET_H = 1.5  # [h] the interpolation points' distance in front of the face
+SMOOTHED_WIDEN = 2  # a smoothed reading's kernel, in the run's smoothing lengths (De Courcy et al. 2024)
 
 
 def face_points(position, normal, diameter: float, dx: float, dim: int, tank) -> np.ndarray:
@@ -69,6 +76,12 @@ def face_pressure(pressure, weight, normal, h, rho0: float, gravity) -> np.ndarr
     points, or one per point."""
     drop = rho0 * (np.asarray(normal, dtype=np.float64) @ np.asarray(gravity, dtype=np.float64)) * OFFSET_H * h
     return np.where(np.asarray(weight) > 0.0, np.asarray(pressure) - drop, 0.0)  # p_wall = p - rho0 (g.n) delta
+
+
+def smoothed_face_pressure(values: dict) -> np.ndarray:
+    """The smoothed reading at each face point from PointProbes(..., widen=SMOOTHED_WIDEN) at the
+    points themselves: the pressure clipped at zero, 0 where no fluid is near."""
+    return np.where(np.asarray(values["weight"]) > 0.0, np.maximum(np.asarray(values["pressure"]), 0.0), 0.0)
 
 
 class WallPressure:

@@ -15,7 +15,7 @@ from .blocks import PressureBlockForce
 from .columns import ColumnMeans
 from .forces import BodyWrench
 from .probes import PointProbes
-from .sensors import WallPressure, face_load, face_load_points, face_points
+from .sensors import SMOOTHED_WIDEN, WallPressure, face_load, face_load_points, face_points, smoothed_face_pressure
 from .surface import elevation, gauge_points
 
 
@@ -39,6 +39,7 @@ class Measurements:
         points, self._slices = [], {}
         # points on wall and body faces, read by WallPressure: the sensors' and the obstacles' faces
         wall, wall_normals, self._sensors = [], [], {}
+        smoothed, self._smoothed = [], {}  # the sensors that read as the converged reference does
         for probe in scene.probes:
             if probe.type == "point":
                 pts = np.asarray([probe.position])
@@ -50,6 +51,10 @@ class Measurements:
             elif probe.type == "pressure_sensor":
                 spacing = spacing_at(probe.position, cfg.zones, cfg.dx)[0]
                 pts = face_points(probe.position, probe.normal, probe.diameter, spacing, dim, scene.tank)
+                if probe.reading == "smoothed":
+                    self._smoothed[probe.name] = (len(smoothed), len(smoothed) + len(pts))
+                    smoothed.extend(pts)
+                    continue
                 self._sensors[probe.name] = (len(wall), len(wall) + len(pts))
                 wall.extend(pts)
                 wall_normals.extend([probe.normal] * len(pts))
@@ -72,6 +77,7 @@ class Measurements:
             wall_normals.extend(normals)
         self._points = PointProbes(solver, points) if points else None
         self._wall = WallPressure(solver, wall, wall_normals) if wall else None
+        self._smoothed_probes = PointProbes(solver, smoothed, widen=SMOOTHED_WIDEN) if smoothed else None
         columns = [p for p in scene.probes if p.type == "column"]
         self._column_names = [p.name for p in columns]
         self._columns = (ColumnMeans(solver, [p.position for p in columns],
@@ -103,6 +109,10 @@ class Measurements:
                 out["sensors"][name] = float(np.mean(p_wall[a:b]))  # the transducer: its face's mean
             for name, (a, pts, normals, areas, centre) in self._faces.items():
                 out["pressure_loads"][name] = face_load(p_wall[a:a + len(pts)], pts, normals, areas, centre)
+        if self._smoothed_probes is not None:
+            p_face = smoothed_face_pressure(self._smoothed_probes.sample())
+            for name, (a, b) in self._smoothed.items():
+                out["sensors"][name] = float(np.mean(p_face[a:b]))
         if self._columns is not None:
             values = self._columns.sample()
             for k, name in enumerate(self._column_names):

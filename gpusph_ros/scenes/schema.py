@@ -27,6 +27,10 @@ from . import yaml_input
 from .boxes import WALL_KINDS, wall_faces
 
 PROBE_TYPES = ("point", "column", "profile", "gauge", "pressure_sensor")
+# how a pressure_sensor reads its face (measure/sensors.py): ``wall``, the wall model's pressure at the
+# face; ``smoothed``, as De Courcy et al. 2024 read theirs (the fluid at the face, a kernel twice as wide,
+# negative pressures clipped)
+SENSOR_READINGS = ("wall", "smoothed")
 SCENE_KEYS = ("name", "description", "source", "dim", "tank", "headroom", "gravity", "depth", "periodic",
               "walls", "fluid", "wet_bed", "obstacles", "refine", "probes", "run", "analysis")
 # a refinement zone's spacing over the scene's dx: each level halves its parent's (scenes/refine.py)
@@ -91,6 +95,7 @@ class Probe:
     heights: tuple = ()
     normal: tuple = ()
     diameter: float = 0.0
+    reading: str = "wall"  # a pressure_sensor's: SENSOR_READINGS (measure/sensors.py)
 
 
 @dataclass
@@ -372,7 +377,7 @@ def _probes(probes_in, tank, dim) -> list:
     for name, item in probes_in.items():
         where = f"probes.{name}"
         _name(where, name)
-        item = _mapping(where, item, ("type", "position", "radius_dx", "heights", "normal", "diameter"),
+        item = _mapping(where, item, ("type", "position", "radius_dx", "heights", "normal", "diameter", "reading"),
                         required=("type", "position"))
         kind = item["type"]
         if kind not in PROBE_TYPES:
@@ -401,11 +406,15 @@ def _probes(probes_in, tank, dim) -> list:
                 raise ConfigError(f"{where}.normal", list(raw), "a non-zero vector into the fluid")
             normal = _pad3(tuple(c / norm for c in raw))
             diameter = _number(f"{where}.diameter", item.get("diameter", 0.0), lo=0.0, hi=max(tank))
+            reading = item.get("reading", "wall")
+            if reading not in SENSOR_READINGS:
+                raise ConfigError(f"{where}.reading", reading, "one of " + ", ".join(SENSOR_READINGS))
         else:
-            for key in ("normal", "diameter"):
+            for key in ("normal", "diameter", "reading"):
                 if key in item:
                     raise ConfigError(f"{where}.{key}", item[key], f"no {key}: only pressure_sensor probes take one")
-        probes.append(Probe(name, kind, position, radius, heights, normal, diameter))
+            reading = "wall"
+        probes.append(Probe(name, kind, position, radius, heights, normal, diameter, reading))
     return probes
 
 
