@@ -25,7 +25,6 @@ import yaml
 from series import run_series
 
 REPO = Path(__file__).resolve().parents[1]
-WINDOWS = ((2.3, 3.3), (3.3, 4.5), (4.5, 6.5))
 END = 6.5  # [t sqrt(g/H)]
 HEIGHTS = (0.01, 0.05, 0.1, 0.8 / 3)  # [H] the reference's P1-P4 (its README)
 FACE = 8.4 / 600  # [H] the reference's sensor face
@@ -45,13 +44,6 @@ def scene(reading="wall", depth_scene="lobovsky_2d"):
     return parse_scene(data), H
 
 
-def impulse(t, p, lo, hi):
-    """The trapezoid integral of p over [lo, hi] of a series interpolated onto a fine grid."""
-    grid = np.linspace(lo, hi, 2001)
-    values = np.interp(grid, t, p)
-    return float(np.sum(0.5 * (values[1:] + values[:-1]) * np.diff(grid)))
-
-
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--boundary", nargs="+", default=["dynamic", "mdbc", "adami"])
@@ -63,6 +55,8 @@ def main():
     args = parser.parse_args()
     sys.path.insert(0, str(REPO))
     from gpusph_ros.analysis import metrics as M
+    from gpusph_ros.analysis.metrics import REFERENCE_WINDOWS as WINDOWS
+    from gpusph_ros.analysis.metrics import window_impulse as impulse
     from gpusph_ros.analysis.reference import data_dir, decourcy_pressures
 
     reference = decourcy_pressures(data_dir())
@@ -99,7 +93,7 @@ def main():
                     onset = M.first_impact(t, p)[0]
                 for w, (lo, hi) in enumerate(WINDOWS):
                     for name, series in (("", p), ("clipped_", np.maximum(p, 0.0))):
-                        value = impulse(t, series, lo, hi) if len(t) and t[-1] >= hi else float("nan")
+                        value = impulse(t, series, lo, hi)
                         row[f"{name}P{k}_w{w + 1}"] = round(value, 4)
                         row[f"{name}P{k}_w{w + 1}_err_pct"] = round(100.0 * (value / ref[k][w] - 1.0), 1)
                 row[f"P{k}_peak"] = round(float(p.max()), 3) if len(p) else float("nan")

@@ -20,6 +20,9 @@ BORE_WINDOW = 6.0  # [s] mean behind the bore (thesis 3.3)
 # quasi-static plateau (~0.6 rho g H) within 0.75 of it
 IMPACT_START = 0.25
 IMPACT_LENGTH = 0.75
+# the windows of t sqrt(g/H) a wall sensor is compared with the converged 2D reference over (De Courcy et
+# al. 2024): the first impact, after it, the flow along the wall
+REFERENCE_WINDOWS = ((2.3, 3.3), (3.3, 4.5), (4.5, 6.5))
 
 
 def moving_average(t, y, window: float = THESIS_WINDOW):
@@ -95,3 +98,14 @@ def first_impact(t, p, start: float = IMPACT_START, length: float = IMPACT_LENGT
     inside = (t >= t0) & (t <= t0 + length)
     ti, pi = t[inside], p[inside]
     return t0, float(np.sum(0.5 * (pi[1:] + pi[:-1]) * np.diff(ti)))  # np.trapz is gone from numpy 2
+
+
+def window_impulse(t, p, lo: float, hi: float) -> float:
+    """The trapezoid integral of ``p`` over [lo, hi], the series interpolated onto 2,001 points there
+    (an irregular digitised series and a sampled one alike); NaN when the series ends before ``hi``."""
+    t, p = np.asarray(t, dtype=np.float64), np.asarray(p, dtype=np.float64)
+    if not len(t) or t[-1] < hi:
+        return float("nan")
+    grid = np.linspace(lo, hi, 2001)
+    values = np.interp(grid, t, p)
+    return float(np.sum(0.5 * (values[1:] + values[:-1]) * np.diff(grid)))

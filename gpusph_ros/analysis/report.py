@@ -13,7 +13,9 @@ acceleration), the mean depth-averaged velocity over 6 s behind the bore, and th
 normalised by it. Lobovsky et al. 2014 (lobovsky_*): per wall sensor the peak pressure, its time,
 the pressure-time integral of the first impact (metrics.first_impact) and the RMS error of the
 series against the measured event; per water-level gauge the RMS error of the level; all in
-the paper's units (p / (rho g H), h / H, t sqrt(g/H)), no time shift.
+the paper's units (p / (rho g H), h / H, t sqrt(g/H)), no time shift; and each sensor's
+pressure-time integral over t sqrt(g/H) 2.3-3.3, 3.3-4.5 and 4.5-6.5 against the converged 2D SPH of
+De Courcy et al. (2024), the reference for a 2D model's near-wall field, both clipped at 0.
 """
 import json
 from dataclasses import dataclass
@@ -160,7 +162,9 @@ def dambreak2(rec, meta, data, scenario, dx, upper, gpusph=True):
 
 def lobovsky(rec, scene, run, data):
     """Lobovsky et al. (2014)'s measures: wall sensors 1-4 (probes sensor_1 ... sensor_4,
-    pressure_sensor or point probes) and the water-level gauges H1-H4 against the measured series."""
+    pressure_sensor or point probes) and the water-level gauges H1-H4 against the measured series;
+    beside them each sensor's pressure-time integral over the three windows of
+    metrics.REFERENCE_WINDOWS against the converged 2D reference's same sensor."""
     out, curves = [], {"pressure": {}, "levels": {}}
     depth = float(scene.get("depth", 0.3))
     g = float(np.linalg.norm(scene.get("gravity") or [0.0, 0.0, 9.81]))
@@ -168,6 +172,7 @@ def lobovsky(rec, scene, run, data):
     t_unit, p_unit = np.sqrt(g / depth), rho0 * g * depth
     exp_p = R.lobovsky_pressures(data) or {}
     exp_h = R.lobovsky_levels(data) or {}
+    converged = R.decourcy_pressures(data) or {}
     for k in (1, 2, 3, 4):
         try:  # a pressure_sensor probe's reading, or a point probe's pressure (recordings before sensors)
             s = rec.topic(f"probes/sensor_{k}")
@@ -190,6 +195,14 @@ def lobovsky(rec, scene, run, data):
                         note=f"of a measured peak {e_pk:.3g}" if exp else "")]
         for row, (label, _) in zip(rows, SENSOR_LABELS.values()):
             row["label"] = f"{label}, {where}"
+        if k in converged:  # the same nondimensional sensor of the converged 2D reference, both clipped at 0
+            for w, (lo, hi) in enumerate(M.REFERENCE_WINDOWS):
+                row = _metric(f"impulse_converged_w{w + 1}_sensor_{k}", M.window_impulse(t, np.maximum(p, 0.0), lo, hi),
+                              M.window_impulse(*converged[k], lo, hi),
+                              note="the 'experiment' is converged 2D SPH (De Courcy et al. 2024, H/400), clipped at 0")
+                row["label"], row["unit"] = (f"pressure-time integral, t sqrt(g/H) {lo:g}-{hi:g}, {where}",
+                                             "p t/(rho g H) sqrt(g/H)")
+                rows.append(row)
         out += rows
         curves["pressure"][k] = (t, p, exp)
     # z is up in every recording that names its axes (output.frames); a 2D scene's y before
