@@ -2,10 +2,12 @@
 (``lobovsky_2d``) against De Courcy et al. (2024)'s delta-SPH at H/400 on the same geometry
 (data/decourcy_2024_dambreak_2d_converged), under each wall treatment and spacing.
 
-Each run goes to t sqrt(g/H) = 6.5 with the four sensors at H/100, H/20, H/10 and 0.267 H on the
-downstream wall, faces H/71.4 tall (8.4 mm at the reference's H = 0.6 m, 4.2 mm here), sampled at
-2 kHz. Per sensor, the pressure-time integral of p / (rho g H) over t sqrt(g/H) in [2.3, 3.3] (the
-first impact), [3.3, 4.5] (after it) and [4.5, 6.5] (the flow along the wall), against the
+Each run goes to t sqrt(g/H) = 6.5 in a tank 3H high (``--tank-height``; rows before it had
+Lobovsky's 2H, over whose downstream wall a run-up without wall friction spills), with the four
+sensors at H/100, H/20, H/10 and 0.267 H on the downstream wall, faces H/71.4 tall (8.4 mm at the
+reference's H = 0.6 m, 4.2 mm here), sampled at 2 kHz. Per sensor, the pressure-time integral of
+p / (rho g H) over t sqrt(g/H) in [2.3, 3.3] (the first impact), [3.3, 4.5] (after it) and
+[4.5, 6.5] (the flow along the wall), against the
 reference's over the same windows; the reading clipped at 0 as the reference clips it (its
 README; ``--reading smoothed`` reads the sensors as the reference reads its own, measure/sensors.py);
 and the onset, when P1 first passes 0.25 rho g H (analysis.metrics.first_impact), against the
@@ -31,13 +33,16 @@ FACE = 8.4 / 600  # [H] the reference's sensor face
 RATE = 2000.0  # [Hz] samples
 
 
-def scene(reading="wall", depth_scene="lobovsky_2d"):
+def scene(reading="wall", height=3.0, depth_scene="lobovsky_2d"):
     """lobovsky_2d with the reference's four sensors, read as ``reading`` says (measure/sensors.py),
-    and no level gauges."""
+    no level gauges, and walls ``height`` H high: Lobovsky's tank is 2H, and a run-up without wall
+    friction spills over its downstream wall from t sqrt(g/H) = 3.4; the reference's geometry
+    (Colagrossi & Landrini 2003, Marrone et al. 2011) is 3H high."""
     from gpusph_ros.scenes.schema import load_scene, parse_scene
 
     data = yaml.safe_load(load_scene(depth_scene).text)
     H, L = data["depth"], data["tank"][0]
+    data["tank"] = [L, height * H]
     data["probes"] = {f"sensor_{k + 1}": {"type": "pressure_sensor", "position": [L, z * H], "normal": [-1, 0],
                                           "diameter": FACE * H, "reading": reading} for k, z in enumerate(HEIGHTS)}
     data["analysis"] = {"case": "lobovsky"}
@@ -50,6 +55,7 @@ def main():
     parser.add_argument("--per-h", type=int, nargs="+", default=[60], help="H / dx of each run")
     parser.add_argument("--out", type=Path, default=REPO / "docs/results/wall_reference.csv")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="more run settings")
+    parser.add_argument("--tank-height", type=float, default=3.0, help="the walls' height in H (Lobovsky's: 2)")
     parser.add_argument("--reading", choices=["wall", "smoothed"], default="wall",
                         help="how the sensors read (smoothed: as the reference reads its own)")
     args = parser.parse_args()
@@ -60,7 +66,7 @@ def main():
     from gpusph_ros.analysis.reference import data_dir, decourcy_pressures
 
     reference = decourcy_pressures(data_dir())
-    sc, H = scene(args.reading)
+    sc, H = scene(args.reading, args.tank_height)
     g = 9.81
     t_unit, p_unit = np.sqrt(g / H), 1000.0 * g * H
     extra = {k: yaml.safe_load(v) for k, v in (s.split("=", 1) for s in args.set)}
@@ -74,7 +80,8 @@ def main():
           "; ".join(f"P{k} " + " / ".join(f"{v:.3f}" for v in ref[k]) for k in ref), f"onset {ref_onset:.3f}")
     for per_h in args.per_h:
         for boundary in args.boundary:
-            settings = " ".join(args.set + ([f"reading={args.reading}"] if args.reading != "wall" else []))
+            settings = " ".join(args.set + ([f"reading={args.reading}"] if args.reading != "wall" else [])
+                                + ([f"tank={args.tank_height:g}H"] if args.tank_height != 2.0 else []))
             if (boundary, per_h, settings) in done:
                 continue
             start = time.perf_counter()
