@@ -171,11 +171,12 @@ class Run:
             raise ValueError(f"checkpoint: {problem}")
         return int(state["next_output"]), float(state["wall"]), int(state["time_origin_ns"])
 
-    def restore(self, state: dict):
-        """Continue from ``checkpoint()`` of a run of the same scene and settings (``check_state``
-        first: nothing changes for a state that does not fit)."""
-        next_output, wall, origin = self.check_state(state)
-        checkpoint.restore(self.solver, state["solver"])
+    def restore(self, state: dict, fitted: tuple = None):
+        """Continue from ``checkpoint()`` of a run of the same scene and settings: nothing changes for
+        a state that does not fit. ``fitted``: what ``check_state(state)`` returned, when the caller
+        has checked it already."""
+        next_output, wall, origin = fitted or self.check_state(state)
+        checkpoint.put(self.solver, state["solver"])
         self.next_output, self.wall, self.time_origin_ns = next_output, wall, origin
         self.output = dataclasses.replace(self.output, **state["output"])
 
@@ -358,7 +359,12 @@ def resume(folder):
             raise ValueError(f"--resume: {earlier} is cut short: the recording before the checkpoint has lost "
                              "messages, and a resumed run would leave a gap in it; gpusph-analyze --repair mends "
                              "the bag's last file only, so the run cannot be resumed")
-    held, last = whole_messages(files[k])
+    whole = is_whole(files[k])
+    if whole:  # its summary counts its messages: no need to read them all
+        entry = file_entries(folder, k + 1)[-1]
+        held, last = entry["count"], entry["last"]
+    else:
+        held, last = whole_messages(files[k])
     last_t = ((last or run.time_origin_ns) - run.time_origin_ns) * 1e-9
     if held < counted:
         raise ValueError(
@@ -368,7 +374,7 @@ def resume(folder):
             "checkpoint; gpusph-analyze --repair makes what the bag holds readable")
     for later in files[k + 1:]:
         later.replace(later.with_name(later.name + ".superseded"))
-    if not is_whole(files[k]) or file_entries(folder, k + 1)[-1]["count"] != counted:
+    if not whole or held != counted:
         repair(folder, run.output.compression, keep=counted)
     recorder = run.open_recording(folder, earlier=file_entries(folder))
     return run, recorder, invocation

@@ -337,9 +337,9 @@ class Session:
                            "~/reset, then load it")
 
         def load(run):
-            run.check_state(state["run"])
+            fitted = run.check_state(state["run"])
             self.stop_recording("stopped: a saved state was loaded")  # its time would go back
-            run.restore(state["run"])
+            run.restore(state["run"], fitted)
             with self._cond:
                 self.failure, self._step_to, self._published = "", -1, run.next_output - 1
                 self._generation += 1

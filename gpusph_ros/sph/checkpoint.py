@@ -113,11 +113,15 @@ def mismatch(solver, state) -> str:
 def restore(solver, state: dict):
     """Put ``state`` (``capture`` of a solver of the same configuration and particle count) into
     ``solver``; ValueError naming what does not match, before anything is changed."""
-    arrays = _stored(solver)
     problem = mismatch(solver, state)
     if problem:
         raise ValueError(f"checkpoint: {problem}")
-    for path, target in arrays.items():
+    put(solver, state)
+
+
+def put(solver, state: dict):
+    """Put ``state`` into ``solver``, which ``mismatch`` has found it fits."""
+    for path, target in _stored(solver).items():
         wp.copy(target, wp.array(state["arrays"][path], dtype=target.dtype, device=target.device))
     nl = solver.neighbours
     lists = nl.nbr.numpy().reshape(nl.n, nl.max_neighbours)
