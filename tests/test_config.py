@@ -23,6 +23,8 @@ pytestmark = pytest.mark.unit
     ("cpu_threads", 1.5, ">= 0"),
     ("gravity", (0.0, 0.0), "3 finite numbers"),
     ("dt_fixed", float("nan"), ">= 0"),
+    ("visco_bound_factor", -0.5, "-1 (the wall model's own) or a number in [0, 10]"),
+    ("visco_bound_factor", 11.0, "[-1, 10]"),
 ])
 def test_bad_field_is_named_with_allowed_values(field, value, allowed):
     with pytest.raises(ConfigError) as err:
@@ -38,6 +40,14 @@ def test_defaults_are_valid_and_c0_follows_depth():
     assert cfg.replace(c0=30.0).sound_speed == 30.0
     assert cfg.eos_b == pytest.approx(cfg.sound_speed ** 2 * 1000.0 / 7.0)
     assert cfg.h == pytest.approx(1.3 * cfg.dx)
+
+
+def test_the_wall_friction_is_the_wall_models_own_unless_set():
+    """visco_bound_factor -1 (the default) takes the wall model's: the particle walls that push keep
+    DualSPHysics' 1, the extrapolated-pressure wall none; a value set is taken as it is."""
+    assert [SolverConfig(boundary=b).wall_friction for b in ("dynamic", "mdbc", "adami")] == [1.0, 1.0, 0.0]
+    assert SolverConfig(boundary="adami", visco_bound_factor=0.5).wall_friction == 0.5
+    assert SolverConfig(boundary="dynamic", visco_bound_factor=0.0).wall_friction == 0.0
 
 
 def test_domain_periodic_and_planes_are_checked():

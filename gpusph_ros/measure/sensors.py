@@ -28,6 +28,11 @@ the boundary particles' own noise that the net force on them carries (forces.py)
 Under mDBC (sph/boundaries/mdbc.py) the wall's own pressure is usable and no offset is needed: each face point
 reads the boundary's pressure, mDBC's first-order extrapolation of the fluid from the ghost node of
 the first boundary layer (dx/2 in front of the face) evaluated at the face (``WallPressure``).
+Under the extrapolated-pressure wall (sph/boundaries/adami.py) each face point reads the wall's own
+condition, Adami et al. (2012) Eq. 27, at the point itself: the Shepard mean of the fluid's pressure
+carried to the face with rho (g . r), before the wall particles' clamp at ambient (on the impinging
+jet at ten particles across the stagnation point reads -5.6%, where the fluid 1.5 h out brought
+back to the face reads -13%: docs/results/wall_pressure.md).
 
 A sensor's ``reading: smoothed`` reads as De Courcy et al. (2024) read the converged 2D reference
 (data/decourcy_2024_dambreak_2d_converged, its README) and as TrixiParticles' validation does: at

@@ -153,8 +153,9 @@ class Numerics:
     alpha: float = setting(0.1, "artificial viscosity coefficient (Monaghan 1992); DualSPHysics' dam-break value")
     # the artificial viscosity of a fluid particle sliding past wall particles at rest is a wall friction
     visco_bound_factor: float = setting(
-        1.0, "artificial viscosity between fluid and wall particles, as a multiple of alpha (DualSPHysics' "
-        "ViscoBoundFactor); it acts as a wall friction: 0 lets a surge run free", lo=0.0, hi=10.0, node=True)
+        -1.0, "artificial viscosity between fluid and wall particles, as a multiple of alpha (DualSPHysics' "
+        "ViscoBoundFactor); it acts as a wall friction: 0 lets a surge run free; -1 = the wall model's own "
+        "(1 dynamic and mdbc, 0 adami)", lo=-1.0, hi=10.0, node=True)
     nu: float = setting(1.0e-6, "kinematic viscosity [m^2/s], laminar and SPS")
     sps_cs: float = setting(0.12, "Smagorinsky constant (thesis Eq. 2.20)")
     sps_ci: float = setting(6.6e-3, "isotropic SPS coefficient C_I (thesis Eq. 2.19)")
@@ -231,6 +232,14 @@ class SolverConfig(Numerics, HealthLimits, Domain):
         return self.c0_coef * math.sqrt(self.g_norm * self.depth)
 
     @property
+    def wall_friction(self) -> float:
+        """The fluid-wall artificial viscosity over alpha: visco_bound_factor, or the wall model's
+        own when that is -1."""
+        if self.visco_bound_factor < 0.0:
+            return boundaries.model(self.boundary).wall_friction
+        return self.visco_bound_factor
+
+    @property
     def free_surface_threshold(self) -> float:
         """shift_tfs, or DualSPHysics' value for the dimension."""
         return self.shift_tfs or (1.5 if self.dim == 2 else 2.75)
@@ -280,9 +289,12 @@ class SolverConfig(Numerics, HealthLimits, Domain):
                 within(f.name, f.metadata["lo"], f.metadata["hi"])
         for name in ("dx", "hdx", "rho0", "gamma", "depth", "cfl", "c0_coef", "xsph_eps", "mk_beta"):
             positive(name)
-        for name in ("alpha", "visco_bound_factor", "nu", "sps_cs", "sps_ci", "delta", "c0", "dt_fixed", "settle_tau",
+        for name in ("alpha", "nu", "sps_cs", "sps_ci", "delta", "c0", "dt_fixed", "settle_tau",
                      "settle_until", "penetration_ratio", "clump_ratio", "clump_fraction", "energy_growth_ratio"):
             positive(name, strict=False)
+        if -1.0 < self.visco_bound_factor < 0.0:
+            raise ConfigError("visco_bound_factor", self.visco_bound_factor,
+                              "-1 (the wall model's own) or a number in [0, 10]")
         if self.mk_beta < 1.0:
             raise ConfigError("mk_beta", self.mk_beta, "a number >= 1 (boundary particles no sparser than fluid)")
         if isinstance(self.shift_coef, bool) or not isinstance(self.shift_coef, (int, float)) \

@@ -49,7 +49,7 @@ def build(scalar):
         h_min: scalar  # the smallest smoothing length of any particle
         viscosity: int
         alpha: scalar
-        alpha_wall: scalar  # alpha x visco_bound_factor, for pairs with a boundary particle
+        alpha_wall: scalar  # alpha x the wall friction, for pairs with a boundary particle
         nu: scalar
         cs_dl2: scalar
         ci_dl2: scalar

@@ -22,6 +22,10 @@ class BoundaryModel:
     repulsive = False
     # before_forces runs before every force evaluation (the half step's too), not once a step
     each_evaluation = False
+    # the fluid-wall artificial viscosity, as a multiple of alpha, of a run that leaves
+    # visco_bound_factor to the wall (-1): particle walls that push need it to damp the fluid's
+    # approach (DualSPHysics' ViscoBoundFactor 1)
+    wall_friction = 1.0
 
     def layers(self, hdx: float) -> int:
         """Layers of wall particles: a kernel support (2h) deep for walls with a volume, else one."""
