@@ -177,6 +177,7 @@ class Run:
         has checked it already."""
         next_output, wall, origin = fitted or self.check_state(state)
         checkpoint.put(self.solver, state["solver"])
+        self.measurements.restart()
         self.next_output, self.wall, self.time_origin_ns = next_output, wall, origin
         self.output = dataclasses.replace(self.output, **state["output"])
 

@@ -3,18 +3,30 @@
 The force is the net reaction of every fluid neighbour on the body's particles, which is what
 GPUSPH and DualSPHysics report: the solver's force pass leaves on each body particle
 acc = -sum_fluid (m_j / m_i) a_(j <- i), so F = sum_i m_i acc_i. The torque is taken about a
-given centre, T = sum_i (x_i - c) x m_i acc_i. Both come from the last force evaluation (the half
-step of the last step) and are summed on the solver's device.
+given centre, T = sum_i (x_i - c) x m_i acc_i, summed on the solver's device.
+
+A sample is the mean over the steps since the last sample: each step adds its force times its
+length (the force of its last evaluation, the half step's, which moved the fluid over the step), and
+a sample divides the sum by the time it spans, as a load cell filtered at the output rate reads.
+Without friction between fluid and wall (the extrapolated-pressure wall's default) the force
+scatters from step to step by about its mean, and one step's value every output aliases that:
+on DamBreak 1 at 3 cm, the 0.04 s peak read 40.2 N from samples at 100 Hz and 45.1 N at 1 kHz. A
+sample before any step is the last force evaluation's.
 """
 import functools
+from types import SimpleNamespace
 
 import numpy as np
 import warp as wp
+
+from ..sph import health
+from ..sph.state import DT
 
 
 @functools.lru_cache(maxsize=None)
 def build(scalar):
     vec = wp.types.vector(3, scalar)
+    healthy = health.build(scalar).healthy
 
     @wp.kernel(enable_backward=False, module="unique")
     def sum_wrench(body_id: int, centre: vec, body: wp.array(dtype=wp.int32), pos: wp.array(dtype=vec),
@@ -25,25 +37,63 @@ def build(scalar):
             wp.atomic_add(out, 0, f)
             wp.atomic_add(out, 1, wp.cross(pos[i] - centre, f))
 
-    return sum_wrench
+    @wp.kernel(enable_backward=False, module="unique")
+    def add_wrench(body_id: int, centre: vec, body: wp.array(dtype=wp.int32), pos: wp.array(dtype=vec),
+                   mass: wp.array(dtype=scalar), acc: wp.array(dtype=vec), stride: int,
+                   fail: wp.array(dtype=wp.int32), clock: wp.array(dtype=wp.float64), out: wp.array(dtype=vec),
+                   span: wp.array(dtype=wp.float64)):
+        """The step's impulse and angular impulse into out, its length into span (a failed step
+        adds nothing: its state is not kept)."""
+        i = wp.tid()
+        if not healthy(fail) or clock[DT] <= wp.float64(0.0):
+            return
+        dt = wp.float64(stride) * clock[DT]
+        if i == 0:
+            span[0] = span[0] + dt
+        if body[i] == body_id:
+            f = mass[i] * acc[i] * scalar(dt)
+            wp.atomic_add(out, 0, f)
+            wp.atomic_add(out, 1, wp.cross(pos[i] - centre, f))
+
+    return SimpleNamespace(sum_wrench=sum_wrench, add_wrench=add_wrench)
 
 
 class BodyWrench:
-    """The wrench on body ``body_id`` about ``centre`` [m]. In 2D runs forces are per unit depth."""
+    """The wrench on body ``body_id`` about ``centre`` [m], the mean over the steps since the last
+    sample. In 2D runs forces are per unit depth."""
 
     def __init__(self, solver, body_id: int, centre=(0.0, 0.0, 0.0)):
         self.solver = solver
         self.body_id = int(body_id)
         self.centre = solver.vec(*[float(c) for c in centre])
-        self._sum = build(solver.scalar)
+        self._passes = build(solver.scalar)
         self._out = wp.zeros(2, dtype=solver.vec, device=solver.device)
+        self._impulse = wp.zeros(2, dtype=solver.vec, device=solver.device)
+        self._span = wp.zeros(1, dtype=wp.float64, device=solver.device)
+        solver.each_step(self._add)
+
+    def _add(self):
+        s = self.solver
+        # one launch: CPU atomics are not atomic across the threads of a split launch
+        wp.launch(self._passes.add_wrench, dim=s.n,
+                  inputs=[self.body_id, self.centre, s.body, s.pos, s.mass, s.acc, s.params.coarse_stride,
+                          s.failures, s.clock, self._impulse, self._span], device=s.device)
+
+    def restart(self):
+        """Forget the steps so far: the next sample averages only the steps after this."""
+        self._impulse.zero_()
+        self._span.zero_()
 
     def sample(self):
         """(force, torque) as host 3-vectors [N, N m]."""
+        span = float(self._span.numpy()[0])
+        if span > 0.0:
+            out = self._impulse.numpy().astype(np.float64) / span
+            self.restart()
+            return out[0], out[1]
         s = self.solver
         self._out.zero_()
-        # one launch: CPU atomics are not atomic across the threads of a split launch
-        wp.launch(self._sum, dim=s.n, inputs=[self.body_id, self.centre, s.body, s.pos, s.mass, s.acc, self._out],
-                  device=s.device)
+        wp.launch(self._passes.sum_wrench, dim=s.n,
+                  inputs=[self.body_id, self.centre, s.body, s.pos, s.mass, s.acc, self._out], device=s.device)
         out = self._out.numpy().astype(np.float64)
         return out[0], out[1]

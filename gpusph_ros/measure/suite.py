@@ -83,6 +83,11 @@ class Measurements:
         self._columns = (ColumnMeans(solver, [p.position for p in columns],
                                      [p.radius_dx * line_spacing(p.position) for p in columns]) if columns else None)
 
+    def restart(self):
+        """Forget what the measurements that average over steps have summed (a restored state)."""
+        for wrench in self._wrenches.values():
+            wrench.restart()
+
     def sample(self) -> dict:
         """{"points": {name: {vel, pressure, rho}}, "profiles": {name: {heights, vel}},
         "gauges": {name: elevation}, "sensors": {name: wall pressure}, "columns": {name: {vel, count}},

@@ -67,6 +67,7 @@ class Solver:
                                         self.launch, self.hsml, self.params.variable_h != 0,
                                         self.params.coarse_stride)
         self._launched = 0
+        self._step_hooks = []
         self.time, self.dt, self.dt_stable, self.steps = 0.0, 0.0, 0.0, 0
         self._excluded_host = (np.zeros(health.N_REASONS, dtype=np.int32), np.array([0.0, -1.0]))
         self._census_host = np.array(health.CENSUS_START)  # as of the last sync
@@ -251,12 +252,30 @@ class Solver:
                   device=dev)
         if self.config.zones:
             self._relevel()
+        for hook in self._step_hooks:
+            hook()
         wp.launch(k.tick, dim=1, inputs=[p, self._fail, self._clock, self._steps], device=dev)
         self.neighbours.moved(self.pos, self.vel, self._clock)
         self._launched += 1
         every, m = self.config.shepard_every, self.params.coarse_stride
         if every and self._launched * m // every > (self._launched - 1) * m // every:  # every `every` fine steps
             self.shepard_filter(rebuild=False)
+
+    def each_step(self, hook):
+        """Call ``hook()`` at the end of every step, before the clock ticks: a measurement that
+        accumulates on the device over the steps between its samples (measure/forces.py). It may
+        only launch: it runs inside the step, where the host reads nothing."""
+        self._step_hooks.append(hook)
+
+    @property
+    def clock(self):
+        """The device clock (float64 slots state.T, DT, DT_STABLE, T_FAILED)."""
+        return self._clock
+
+    @property
+    def failures(self):
+        """The device's failure flags of the step under way (health.healthy reads them)."""
+        return self._fail
 
     def _walls_again(self, f):
         """The walls set from the fluid again before a later force pass of the step, for a model that

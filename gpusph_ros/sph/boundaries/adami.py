@@ -109,30 +109,57 @@ def build(scalar):
         pressure = wp.max(extrapolated_pressure(p_sum, rho_r, w_sum, p.gravity, vec(scalar(0.0))), scalar(0.0))
         f.rho[i] = eos_density(pressure, p.rho0, p.eos_b, p.gamma, p.rho_min, p.rho_max)
 
+    @wp.func
+    def occupied(p: Params, grid: Grid, f: Fields, x: vec, h_x: scalar, j: int, fluid: scalar, wall: scalar):
+        """Particle j's part of the kernel sums sum V W at x of the fluid and of the walls of x's level."""
+        if same_level(p, h_x, f.hsml[j]):
+            r = wp.length(separation(grid, x, f.pos[j]))
+            h, inv_h, norm, scale = smoothing(p, h_x, f.hsml[j])
+            if r < scalar(2.0) * h:
+                vw = f.mass[j] / f.rho[j] * kernel_w(p.kernel, norm, inv_h, r)
+                if state.carries_fluid(f.ptype[j]):
+                    fluid += vw
+                elif f.ptype[j] == BOUNDARY:
+                    wall += vw
+        return fluid, wall
+
     @wp.kernel(enable_backward=False, module="unique")
     def face_pressure(p: Params, grid: Grid, start: wp.array(dtype=wp.int32), end: wp.array(dtype=wp.int32),
                       order: wp.array(dtype=wp.int32), f: Fields, points: wp.array(dtype=vec),
                       normals: wp.array(dtype=vec), spacing: wp.array(dtype=scalar), pressure: wp.array(dtype=scalar),
                       weight: wp.array(dtype=scalar)):
         """The pressure on a wall face at each point: Eq. 27 at the point itself, the wall's own
-        condition read where the face is, before the wall's clamp (a sensor reads the fluid's tension
-        too, and a reading clipped at 0 is the caller's choice); 0, with weight 0, where no fluid is
-        near. Each point reads at its own spacing (levels.spacing_at). A measurement: the
-        fluid is found through the cell grid (``order`` maps its slots)."""
+        condition read where the face is, times the share of the support's room beside the walls that
+        the fluid fills, sum_f V_f W / (1 - sum_w V_w W), at most 1: Eq. 27's Shepard mean carries
+        the pressure of the fluid present over the whole support, which is right where the fluid
+        meets the wall and wrong where part of the support is dry (air at ambient): a thin tongue
+        first touching a face would read its water hammer over a patch 2h around each particle
+        (on DamBreak 1 at 3 cm, 3.5 times the impulse that the body's particles received over the
+        first contact). Before the wall's clamp (a sensor reads the fluid's tension too; a reading
+        clipped at 0 is the caller's choice); 0, with weight 0, where no fluid is near. Each point
+        reads at its own spacing (levels.spacing_at). A measurement: the fluid is found through the
+        cell grid (``order`` maps its slots)."""
         k = wp.tid()
         x = points[k]
         h_x = p.h * spacing[k] / p.dx
         p_sum = scalar(0.0)
         w_sum = scalar(0.0)
         rho_r = vec(scalar(0.0))
+        fluid = scalar(0.0)
+        wall = scalar(0.0)
         ci = cell_coord(grid, x)
         for c in range(cells_around(grid)):
             cell = cell_around(grid, ci, c)
             if cell >= 0:
                 for s in range(start[cell], end[cell]):
                     p_sum, rho_r, w_sum = fluid_term(p, grid, f, x, h_x, order[s], p_sum, rho_r, w_sum)
+                    fluid, wall = occupied(p, grid, f, x, h_x, order[s], fluid, wall)
         weight[k] = w_sum
-        pressure[k] = extrapolated_pressure(p_sum, rho_r, w_sum, p.gravity, vec(scalar(0.0)))
+        wet = scalar(1.0)
+        room = scalar(1.0) - wall
+        if fluid < room:
+            wet = fluid / room
+        pressure[k] = wet * extrapolated_pressure(p_sum, rho_r, w_sum, p.gravity, vec(scalar(0.0)))
 
     return SimpleNamespace(extrapolated_pressure=extrapolated_pressure, boundary_pressure=boundary_pressure,
                            face_pressure=face_pressure)
