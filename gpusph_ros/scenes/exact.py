@@ -14,7 +14,9 @@ from ..sph import BOUNDARY, FLUID, Particles, SolverConfig, boundaries
 RHO0, U, WIDTH = 1000.0, 1.0, 0.1  # [kg/m^3], [m/s], [m]: the jet
 LENGTH = 1.5  # [m] of jet: its tail reaches the wall at about (GAP + LENGTH) / U
 GAP = 0.02  # [m] between the jet's head and the wall's face at t = 0
-WALL_HALF = 1.5  # [m] of wall above and below the jet's axis: the sheets run along it at about U and reach its ends after the window, no sheet turning round an end into the wall's back
+# [m] of wall above and below the jet's axis: the sheets run along it at about U and reach its ends
+# after the window, no sheet turning round an end into the wall's back
+WALL_HALF = 1.5
 C0 = 15.0  # [m/s] the sound speed, 15 U: density within about 0.5% in the steady jet
 
 

@@ -20,7 +20,8 @@ VISCOSITY_ID = {name: k for k, name in enumerate(NAMES)}
 
 def params(cfg) -> dict:
     """The Params fields of the viscosity of ``cfg`` (a SolverConfig): its id, alpha and alpha at the
-    wall (x the wall friction, SolverConfig.wall_friction), nu, and the SPS constants times the spacing, (Cs dl)^2 and CI dl^2."""
+    wall (x the wall friction, SolverConfig.wall_friction), nu, and the SPS constants times the
+    spacing, (Cs dl)^2 and CI dl^2."""
     return {"viscosity": VISCOSITY_ID[cfg.viscosity], "alpha": cfg.alpha,
             "alpha_wall": cfg.alpha * cfg.wall_friction, "nu": cfg.nu, "cs_dl2": (cfg.sps_cs * cfg.dx) ** 2,
             "ci_dl2": cfg.sps_ci * cfg.dx ** 2}
