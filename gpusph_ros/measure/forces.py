@@ -11,7 +11,8 @@ a sample divides the sum by the time it spans, as a load cell filtered at the ou
 Without friction between fluid and wall (the extrapolated-pressure wall's default) the force
 scatters from step to step by about its mean, and one step's value every output aliases that:
 on DamBreak 1 at 3 cm, the 0.04 s peak read 40.2 N from samples at 100 Hz and 45.1 N at 1 kHz. A
-sample before any step is the last force evaluation's.
+sample with no step since the last one repeats it; before any step, it is the last force
+evaluation's.
 """
 import functools
 from types import SimpleNamespace
@@ -70,6 +71,7 @@ class BodyWrench:
         self._out = wp.zeros(2, dtype=solver.vec, device=solver.device)
         self._impulse = wp.zeros(2, dtype=solver.vec, device=solver.device)
         self._span = wp.zeros(1, dtype=wp.float64, device=solver.device)
+        self._last = None
         solver.each_step(self._add)
 
     def _add(self):
@@ -83,6 +85,7 @@ class BodyWrench:
         """Forget the steps so far: the next sample averages only the steps after this."""
         self._impulse.zero_()
         self._span.zero_()
+        self._last = None
 
     def sample(self):
         """(force, torque) as host 3-vectors [N, N m]."""
@@ -90,7 +93,9 @@ class BodyWrench:
         if span > 0.0:
             out = self._impulse.numpy().astype(np.float64) / span
             self.restart()
-            return out[0], out[1]
+            self._last = (out[0], out[1])
+        if self._last is not None:
+            return self._last
         s = self.solver
         self._out.zero_()
         wp.launch(self._passes.sum_wrench, dim=s.n,
