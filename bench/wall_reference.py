@@ -28,25 +28,7 @@ from series import run_series
 
 REPO = Path(__file__).resolve().parents[1]
 END = 6.5  # [t sqrt(g/H)]
-HEIGHTS = (0.01, 0.05, 0.1, 0.8 / 3)  # [H] the reference's P1-P4 (its README)
-FACE = 8.4 / 600  # [H] the reference's sensor face
 RATE = 2000.0  # [Hz] samples
-
-
-def scene(reading="wall", height=3.0, depth_scene="lobovsky_2d"):
-    """lobovsky_2d with the reference's four sensors, read as ``reading`` says (measure/sensors.py),
-    no level gauges, and walls ``height`` H high: Lobovsky's tank is 2H, and a run-up without wall
-    friction spills over its downstream wall from t sqrt(g/H) = 3.4; the reference's geometry
-    (Colagrossi & Landrini 2003, Marrone et al. 2011) is 3H high."""
-    from gpusph_ros.scenes.schema import load_scene, parse_scene
-
-    data = yaml.safe_load(load_scene(depth_scene).text)
-    H, L = data["depth"], data["tank"][0]
-    data["tank"] = [L, height * H]
-    data["probes"] = {f"sensor_{k + 1}": {"type": "pressure_sensor", "position": [L, z * H], "normal": [-1, 0],
-                                          "diameter": FACE * H, "reading": reading} for k, z in enumerate(HEIGHTS)}
-    data["analysis"] = {"case": "lobovsky"}
-    return parse_scene(data), H
 
 
 def main():
@@ -64,9 +46,10 @@ def main():
     from gpusph_ros.analysis.metrics import REFERENCE_WINDOWS as WINDOWS
     from gpusph_ros.analysis.metrics import window_impulse as impulse
     from gpusph_ros.analysis.reference import data_dir, decourcy_pressures
+    from gpusph_ros.scenes.reference import decourcy_scene
 
     reference = decourcy_pressures(data_dir())
-    sc, H = scene(args.reading, args.tank_height)
+    sc, H = decourcy_scene(args.reading, args.tank_height)
     g = 9.81
     t_unit, p_unit = np.sqrt(g / H), 1000.0 * g * H
     extra = {k: yaml.safe_load(v) for k, v in (s.split("=", 1) for s in args.set)}
