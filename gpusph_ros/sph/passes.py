@@ -204,7 +204,7 @@ def _force_passes(scalar):
                 for k in range(p.n_planes):
                     n_k = plane_normal[k]
                     da, ddr = plane_wall(p.kernel, norm_i, inv_h_i, p.dim, wp.dot(xi - plane_point[k], n_k), n_k,
-                                         p_i, rho_i, ui, p.lj_d, p.plane_r0)
+                                         p_i, rho_i, ui, p.lj_d, p.plane_r0, p.gravity)
                     a += da
                     dr += ddr
                 if p.n_planes > 1:
