@@ -9,8 +9,8 @@ gradient along the plane: with V(d) = the kernel integrated over the half-space 
 (1/2 at d = 0), it adds -V(d) (g - (g . n) n). Without it the fluid beside a vertical plane sank:
 the first column at 2.40 m/s^2 where the tank's interior accelerates at 0.18 (V = 0.25 at d = dx/2),
 which a particle floor that does not stiffen as the fluid nears it (the extrapolated-pressure
-wall) let through at the plane's foot (docs/results/wall_pressure.md). A Lennard-Jones term with r0 = dx/2 (the lattice's
-distance to the wall) stops penetration where the pressure is near zero.
+wall) let through at the plane's foot (docs/results/wall_pressure.md). A Lennard-Jones term with
+r0 = dx/2 (the lattice's distance to the wall) stops penetration where the pressure is near zero.
 Where two orthogonal planes meet (a tank's edge; a corner in 2D) the region behind both lies in
 both half-spaces: its mirrored pressure would be counted twice, and the fluid in the corner was
 thrown out of it (a still 2D tank's corner particle: 44 m/s^2 in the first step against 14 at one
