@@ -28,8 +28,9 @@ def test_the_force_on_a_wall_a_jet_hits_is_its_momentum_flux(boundary):
     the density gradient into the wall, -11.8%). The extrapolated-pressure wall has no fluid-wall
     friction and its force scatters from step to step by about its mean: a sample of one step's
     force every 0.02 s would not do. Under mDBC and the extrapolated-pressure wall the sensor at the
-    stagnation point, sampled every 0.02 s, reads rho U^2 / 2 within 20% (measured -12% mdbc, -6%
-    at twenty across with the bench's samples; -9% adami); under dynamic walls it does not (-42%)."""
+    stagnation point, sampled every 0.02 s, reads rho U^2 / 2 within 20% (measured -15% mdbc, -6%
+    at twenty across with the bench's samples before the wet share; -9% adami); under dynamic walls
+    it does not (-42%)."""
     cfg, particles, face, dx = impinging_jet(10, boundary)
     solver = Solver(cfg, particles)
     wrench = BodyWrench(solver, 0)

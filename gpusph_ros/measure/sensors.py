@@ -27,10 +27,14 @@ the boundary particles' own noise that the net force on them carries (forces.py)
 
 Under mDBC (sph/boundaries/mdbc.py) the wall's own pressure is usable and no offset is needed: each face point
 reads the boundary's pressure, mDBC's first-order extrapolation of the fluid from the ghost node of
-the first boundary layer (dx/2 in front of the face) evaluated at the face (``WallPressure``).
+the first boundary layer (dx/2 in front of the face) evaluated at the face (``WallPressure``),
+times the wet share of the support at the face (``interpolate.wet_share``, as below): on DamBreak 1
+at 3 cm the load's peak read 111.7 N without it against the particles' 27.8 N, 24.1 N with it.
 Under the extrapolated-pressure wall (sph/boundaries/adami.py) each face point reads the wall's own
 condition, Adami et al. (2012) Eq. 27, at the point itself: the Shepard mean of the fluid's pressure
-carried to the face with rho (g . r), before the wall particles' clamp at ambient (on the impinging
+carried to the face with rho (g . r), times the wet share of the support (the fluid's kernel sum
+over the room the walls leave, at most 1: a Shepard mean fills a dry part of the support with the
+fluid present), before the wall particles' clamp at ambient (on the impinging
 jet at ten particles across the stagnation point reads -5.6%, where the fluid 1.5 h out brought
 back to the face reads -13%: docs/results/wall_pressure.md).
 

@@ -32,6 +32,7 @@ def build(scalar):
     mat44 = wp.types.matrix((4, 4), scalar)
     K = kernels.build(scalar)
     kernel_w, grad_factor, smoothing, own_scale = K.w, K.grad_factor, K.smoothing, K.own_scale
+    kernels_same_level = K.same_level
     N = neighbours.grid(scalar)
     Grid, separation = N.Grid, N.separation
     S = state.build(scalar)
@@ -83,5 +84,30 @@ def build(scalar):
                 return (inv * rhs)[0]
         return rhs[0] / a[0, 0]
 
-    return SimpleNamespace(vec4=vec4, mat44=mat44, no_sums=no_sums, corrected_term=corrected_term,
+    @wp.func
+    def occupied(p: Params, grid: Grid, f: Fields, x: vec, h_x: scalar, j: int, fluid: scalar, wall: scalar):
+        """Particle j's part of the kernel sums sum V W at x of the fluid and of the walls of x's level."""
+        if kernels_same_level(p, h_x, f.hsml[j]):
+            r = wp.length(separation(grid, x, f.pos[j]))
+            h, inv_h, norm, scale = smoothing(p, h_x, f.hsml[j])
+            if r < scalar(2.0) * h:
+                vw = f.mass[j] / f.rho[j] * kernel_w(p.kernel, norm, inv_h, r)
+                if state.carries_fluid(f.ptype[j]):
+                    fluid += vw
+                elif f.ptype[j] == state.BOUNDARY:
+                    wall += vw
+        return fluid, wall
+
+    @wp.func
+    def wet_share(fluid: scalar, wall: scalar) -> scalar:
+        """The share of a support's room beside the walls that the fluid fills, sum_f V W /
+        (1 - sum_w V W), at most 1: a face reading's weight where part of the support is dry (air
+        at ambient), which a Shepard mean would fill with the fluid present."""
+        room = scalar(1.0) - wall
+        if fluid < room:
+            return fluid / room
+        return scalar(1.0)
+
+    return SimpleNamespace(vec4=vec4, mat44=mat44, no_sums=no_sums, corrected_term=corrected_term, occupied=occupied,
+                           wet_share=wet_share,
                            corrected_density=corrected_density)

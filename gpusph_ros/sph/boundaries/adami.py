@@ -26,7 +26,7 @@ from types import SimpleNamespace
 
 import warp as wp
 
-from .. import eos, kernels, neighbours, state
+from .. import eos, interpolate, kernels, neighbours, state
 from .model import BoundaryModel
 
 BOUNDARY = state.BOUNDARY
@@ -66,6 +66,8 @@ def build(scalar):
     Params, Fields = S.Params, S.Fields
     E = eos.build(scalar)
     eos_pressure, eos_density = E.pressure, E.density
+    interp = interpolate.build(scalar)
+    occupied, wet_share = interp.occupied, interp.wet_share
 
     @wp.func
     def extrapolated_pressure(p_w_sum: scalar, rho_r_w_sum: vec, w_sum: scalar, g: vec, a_wall: vec) -> scalar:
@@ -109,20 +111,6 @@ def build(scalar):
         pressure = wp.max(extrapolated_pressure(p_sum, rho_r, w_sum, p.gravity, vec(scalar(0.0))), scalar(0.0))
         f.rho[i] = eos_density(pressure, p.rho0, p.eos_b, p.gamma, p.rho_min, p.rho_max)
 
-    @wp.func
-    def occupied(p: Params, grid: Grid, f: Fields, x: vec, h_x: scalar, j: int, fluid: scalar, wall: scalar):
-        """Particle j's part of the kernel sums sum V W at x of the fluid and of the walls of x's level."""
-        if same_level(p, h_x, f.hsml[j]):
-            r = wp.length(separation(grid, x, f.pos[j]))
-            h, inv_h, norm, scale = smoothing(p, h_x, f.hsml[j])
-            if r < scalar(2.0) * h:
-                vw = f.mass[j] / f.rho[j] * kernel_w(p.kernel, norm, inv_h, r)
-                if state.carries_fluid(f.ptype[j]):
-                    fluid += vw
-                elif f.ptype[j] == BOUNDARY:
-                    wall += vw
-        return fluid, wall
-
     @wp.kernel(enable_backward=False, module="unique")
     def face_pressure(p: Params, grid: Grid, start: wp.array(dtype=wp.int32), end: wp.array(dtype=wp.int32),
                       order: wp.array(dtype=wp.int32), f: Fields, points: wp.array(dtype=vec),
@@ -155,11 +143,7 @@ def build(scalar):
                     p_sum, rho_r, w_sum = fluid_term(p, grid, f, x, h_x, order[s], p_sum, rho_r, w_sum)
                     fluid, wall = occupied(p, grid, f, x, h_x, order[s], fluid, wall)
         weight[k] = w_sum
-        wet = scalar(1.0)
-        room = scalar(1.0) - wall
-        if fluid < room:
-            wet = fluid / room
-        pressure[k] = wet * extrapolated_pressure(p_sum, rho_r, w_sum, p.gravity, vec(scalar(0.0)))
+        pressure[k] = wet_share(fluid, wall) * extrapolated_pressure(p_sum, rho_r, w_sum, p.gravity, vec(scalar(0.0)))
 
     return SimpleNamespace(extrapolated_pressure=extrapolated_pressure, boundary_pressure=boundary_pressure,
                            face_pressure=face_pressure)

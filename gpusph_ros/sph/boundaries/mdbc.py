@@ -85,6 +85,7 @@ def build(scalar):
     interp = interpolate.build(scalar)
     vec4, mat44, no_sums = interp.vec4, interp.mat44, interp.no_sums
     ghost_term, corrected_density = interp.corrected_term, interp.corrected_density
+    occupied, wet_share = interp.occupied, interp.wet_share
     same_level = kernels.build(scalar).same_level
     N = neighbours.grid(scalar)
     Grid, cell_coord, cells_around, cell_around = N.Grid, N.cell_coord, N.cells_around, N.cell_around
@@ -200,7 +201,17 @@ def build(scalar):
         weight[k] = a[0, 0]
         pressure[k] = scalar(0.0)
         if a[0, 0] > scalar(0.0):
-            pressure[k] = cloned_pressure(p, ghost_density(p, a, rhs, h_g), -off)
+            # weighted by the wet share at the face, as the extrapolated-pressure wall's reading
+            # (adami.py): the ghost's Shepard-normalised sums fill a dry part of the support
+            fluid = scalar(0.0)
+            wall = scalar(0.0)
+            cf = cell_coord(grid, points[k])
+            for c in range(cells_around(grid)):
+                cell = cell_around(grid, cf, c)
+                if cell >= 0:
+                    for s in range(start[cell], end[cell]):
+                        fluid, wall = occupied(p, grid, f, points[k], h_g, order[s], fluid, wall)
+            pressure[k] = wet_share(fluid, wall) * cloned_pressure(p, ghost_density(p, a, rhs, h_g), -off)
 
     return SimpleNamespace(ghost_offset=ghost_offset, ghost_offsets=ghost_offsets, boundary_state=boundary_state,
                            face_pressure=face_pressure)
