@@ -59,8 +59,9 @@ def main(argv=None):
         if t <= args.window[0] + 1e-9:
             solver.advance(float(t))
         else:
-            # every step of the window: a sample of the force every 0.05 s would alias the wall's
-            # step-to-step scatter, large where nothing damps the fluid's motion normal to the wall
+            # every step of the window, one sample a step: the wrench's own mean between samples
+            # gives the window's force, and these give its scatter from step to step, large where
+            # nothing damps the fluid's motion normal to the wall
             while not solver.reached(float(t)):
                 before = solver.time
                 solver.step()

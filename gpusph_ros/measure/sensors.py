@@ -35,8 +35,8 @@ condition, Adami et al. (2012) Eq. 27, at the point itself: the Shepard mean of 
 carried to the face with rho (g . r), times the wet share of the support (the fluid's kernel sum
 over the room the walls leave, at most 1: a Shepard mean fills a dry part of the support with the
 fluid present), before the wall particles' clamp at ambient (on the impinging
-jet at ten particles across the stagnation point reads -5.6%, where the fluid 1.5 h out brought
-back to the face reads -13%: docs/results/wall_pressure.md).
+jet at ten particles across the stagnation point reads -6.8% averaged over every step, where the
+fluid 1.5 h out brought back to the face read -13%: docs/results/wall_pressure.md).
 
 A sensor's ``reading: smoothed`` reads as De Courcy et al. (2024) read the converged 2D reference
 (data/decourcy_2024_dambreak_2d_converged, its README) and as TrixiParticles' validation does: at
