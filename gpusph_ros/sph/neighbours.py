@@ -5,8 +5,10 @@ later pass of the step loops over that list only. (Half-width cells searched two
 
 The lists reach list_skin x the kernel support and are Verlet lists: they are rebuilt only once
 some particle, where the next step's force passes will read it, would be more than half the skin
-from where it was at the last build, which the device decides by itself (a flag the list kernel
-reads), so no step waits for the host.
+from where it was at the last build, which the device decides by itself: the sort and the build
+are a branch of the step on the device's stale flag (``wp.capture_if``: a conditional node of a
+captured graph, the flag read in place on a CPU), so no step waits for the host and an ordinary
+step sorts nothing. A reorder (solver.py) builds from its own sort.
 
 Periodic axes wrap both the cell search and the separation vector (minimum image).
 
@@ -176,6 +178,12 @@ def build(scalar):
         values[i] = i
 
     @wp.kernel(enable_backward=False, module="unique")
+    def identity(order: wp.array(dtype=wp.int32)):
+        """The order of particles that already stand in cell order."""
+        k = wp.tid()
+        order[k] = k
+
+    @wp.kernel(enable_backward=False, module="unique")
     def cell_ranges(n: int, keys: wp.array(dtype=wp.int32), start: wp.array(dtype=wp.int32),
                     end: wp.array(dtype=wp.int32)):
         k = wp.tid()
@@ -212,7 +220,7 @@ def build(scalar):
 
     @wp.kernel(enable_backward=False, module="unique")
     def mark_built(stale: wp.array(dtype=wp.int32), builds: wp.array(dtype=wp.int32)):
-        builds[0] = builds[0] + stale[0]
+        builds[0] = builds[0] + 1
         stale[0] = 0
 
     @wp.kernel(enable_backward=False, module="unique")
@@ -221,14 +229,12 @@ def build(scalar):
                        start: wp.array(dtype=wp.int32),
                        end: wp.array(dtype=wp.int32), nbr: wp.array(dtype=wp.int32),
                        count: wp.array(dtype=wp.int32), needs_list: wp.array(dtype=wp.int32),
-                       ghost: wp.array(dtype=vec), stale: wp.array(dtype=wp.int32), x_build: wp.array(dtype=vec),
+                       ghost: wp.array(dtype=vec), x_build: wp.array(dtype=vec),
                        overflow: wp.array(dtype=wp.int32), chunk: int, stride: int):
         """A particle's list: every candidate within the list radius of it or, for a boundary
         particle with a ghost node (mdbc.py, at ``ghost`` from it; zero otherwise), of that node."""
         # walk particles in cell order, reading the candidates' positions in that order too:
         # the candidates of one cell lie next to each other in memory
-        if stale[0] == 0:
-            return
         ki = wp.tid() * stride + chunk
         i = order[ki]
         x_build[i] = pos_sorted[ki]
@@ -296,7 +302,8 @@ def build(scalar):
             n = grid.max_neighbours
         count[i] = n
 
-    return SimpleNamespace(Grid=Grid, cell_keys=cell_keys, cell_ranges=cell_ranges, gather_sorted=gather_sorted,
+    return SimpleNamespace(Grid=Grid, cell_keys=cell_keys, identity=identity, cell_ranges=cell_ranges,
+                           gather_sorted=gather_sorted,
                            neighbour_list=neighbour_list, check_displacement=check_displacement,
                            mark_built=mark_built)
 
@@ -348,6 +355,7 @@ class NeighbourList:
         g.max_neighbours = max_neighbours
         self.grid = g
         ncells = dims[0] * dims[1] * dims[2]
+        self._key_bits = ncells.bit_length()  # the vacant slots' key is ncells
         self._keys = wp.zeros(2 * n, dtype=wp.int32, device=device)
         self._order = wp.zeros(2 * n, dtype=wp.int32, device=device)
         self._start = wp.zeros(ncells, dtype=wp.int32, device=device)
@@ -378,30 +386,58 @@ class NeighbourList:
                   inputs=[self.grid, pos, vel, self._x_build, clock, self.stale], device=self.device)
 
     def sort(self, pos: wp.array) -> wp.array:
-        """Sort the particles by cell; returns the particle index of each sorted position."""
-        n = self.n
-        wp.launch(self._passes.cell_keys, dim=n, inputs=[self.grid, pos, self._ptype, self._keys, self._order],
+        """Sort the particles by cell; returns the particle index of each sorted position. The
+        radix sort reads only the bits a cell index (and the vacant slots' key past the last cell)
+        needs: 16 instead of 32 on DamBreak 1's grid."""
+        wp.launch(self._passes.cell_keys, dim=self.n, inputs=[self.grid, pos, self._ptype, self._keys, self._order],
                   device=self.device)
-        wp.utils.radix_sort_pairs(self._keys, self._order, n)
+        wp.utils.radix_sort_pairs(self._keys, self._order, self.n, end_bit=self._key_bits)
         return self._order
 
-    def rebuild(self, pos: wp.array, force: bool = False):
-        """Rebuild the lists if they are stale (decided on the device) or ``force``."""
-        if force:
-            self.stale.fill_(1)
-        n = self.n
+    def sort_cells(self, pos: wp.array):
+        """Sort the particles by cell and find each cell's range (cell_start, cell_end, order), the
+        lists untouched: for a measurement that walks the cells of the current state."""
         self.sort(pos)
+        self._ranges()
+
+    def _ranges(self):
         self._start.zero_()
         self._end.zero_()
-        wp.launch(self._passes.cell_ranges, dim=n, inputs=[n, self._keys, self._start, self._end], device=self.device)
+        wp.launch(self._passes.cell_ranges, dim=self.n, inputs=[self.n, self._keys, self._start, self._end],
+                  device=self.device)
+
+    def _build(self, pos: wp.array, presorted: bool = False):
+        """Sort (unless the particles already stand in the last sort's cell order), then build
+        every list."""
+        n = self.n
+        if presorted:
+            wp.launch(self._passes.identity, dim=n, inputs=[self._order], device=self.device)
+        else:
+            self.sort(pos)
+        self._ranges()
         wp.launch(self._passes.gather_sorted, dim=n, inputs=[self._order, pos, self._ptype, self._hsml,
-                                                     self._pos_sorted, self._ptype_sorted, self._hsml_sorted],
+                                                             self._pos_sorted, self._ptype_sorted, self._hsml_sorted],
                   device=self.device)
         self.launcher(self._passes.neighbour_list, n, [self.grid, self._pos_sorted, self._ptype_sorted,
-                                                self._hsml_sorted, self._order,
-                                                self._start, self._end, self.nbr, self.count, self._needs_list,
-                                                self._ghost, self.stale, self._x_build, self.overflow])
+                                                       self._hsml_sorted, self._order,
+                                                       self._start, self._end, self.nbr, self.count, self._needs_list,
+                                                       self._ghost, self._x_build, self.overflow])
         wp.launch(self._passes.mark_built, dim=1, inputs=[self.stale, self.builds], device=self.device)
+
+    def rebuild(self, pos: wp.array, force: bool = False):
+        """Sort and build the lists if they are stale (the device's flag: a branch of a captured
+        graph, read in place on a CPU) or ``force``. Between builds the cells keep the last
+        sort's ranges: a particle has moved less than half the skin since, so a walk of the cells
+        one list radius around a point still finds every particle within a kernel support of it."""
+        if force:
+            self.stale.fill_(1)
+        wp.capture_if(self.stale, on_true=self._build, pos=pos)
+
+    def rebuild_sorted(self, pos: wp.array):
+        """Build the lists of particles just put in the order of the last sort (a reorder), with
+        no second sort."""
+        self.stale.fill_(1)
+        self._build(pos, presorted=True)
 
     @property
     def cell_start(self) -> wp.array:

@@ -211,7 +211,7 @@ class Solver:
         wp.launch(self._passes.permute, dim=self.n, inputs=[order, *state, *self._sorted], device=self.device)
         for dst, src in zip(state, self._sorted):
             wp.copy(dst, src)
-        self.neighbours.stale.fill_(1)
+        self.neighbours.rebuild_sorted(self.pos)
 
     def _launch_step(self, t_target: float):
         n, dev, p, k = self.n, self.device, self.params, self._passes
@@ -519,7 +519,7 @@ class Solver:
         """(params, fields, neighbours) with pressure and the cell sort brought up to the current
         state, for measurements that run on the device between steps."""
         self.update_pressure()
-        self.neighbours.rebuild(self.pos)
+        self.neighbours.sort_cells(self.pos)
         return self.params, self.fields, self.neighbours
 
     def device_bytes(self) -> int:
