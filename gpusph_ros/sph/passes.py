@@ -28,8 +28,9 @@ BOUNDARY = state.BOUNDARY
 carries_fluid = state.carries_fluid
 VACANT = state.VACANT
 EXCLUDED = state.EXCLUDED
-T, DT, DT_STABLE, T_FAILED = state.T, state.DT, state.DT_STABLE, state.T_FAILED
-STEP, FAILED_STEP = state.STEP, state.FAILED_STEP
+T, DT, DT_STABLE, T_FAILED, TARGET = state.T, state.DT, state.DT_STABLE, state.T_FAILED, state.TARGET
+STEP, FAILED_STEP, LAUNCHED, IN_BLOCK = state.STEP, state.FAILED_STEP, state.LAUNCHED, state.IN_BLOCK
+RUNNING, REORDER_DUE, CENSUS_DUE, SHEPARD_DUE = state.RUNNING, state.REORDER_DUE, state.CENSUS_DUE, state.SHEPARD_DUE
 ENERGY = health.ENERGY
 ARTIFICIAL = viscosity.VISCOSITY_ID["artificial"]
 SPS = viscosity.VISCOSITY_ID["sps"]
@@ -295,13 +296,13 @@ def _time_passes(scalar):
     own_scale, stride, selected = K.own_scale, K.stride, K.selected
 
     @wp.kernel(enable_backward=False, module="unique")
-    def choose_dt(p: Params, t_target: wp.float64, maxima: wp.array(dtype=scalar), fail: wp.array(dtype=wp.int32),
+    def choose_dt(p: Params, maxima: wp.array(dtype=scalar), fail: wp.array(dtype=wp.int32),
                   clock: wp.array(dtype=wp.float64)):
         """dt = CFL min(sqrt(h/|a|max), h/(c0 + h max|mu|), 0.125 h^2/nu) (Monaghan 1992; GPUSPH).
 
         Time is float64 whatever the precision: a float32 clock cannot land on an output time.
         With multirate the step launched spans ``coarse_stride`` steps dt of the finest level
-        (interact scales the coarser levels' bounds), and lands on t_target with all of them.
+        (interact scales the coarser levels' bounds), and lands on the clock's TARGET with all of them.
         """
         a_max = scalar(0.0)
         mu_max = scalar(0.0)
@@ -319,7 +320,7 @@ def _time_passes(scalar):
                 h_min = wp.float64(p.h_min)  # the finest particles bound the viscous step
                 dt = wp.min(dt, cfl * wp.float64(0.125) * h_min * h_min / wp.float64(p.nu))
         clock[DT_STABLE] = dt  # the step the stability limits allow, before landing on t_target
-        remaining = (t_target - clock[T]) / wp.float64(p.coarse_stride)
+        remaining = (clock[TARGET] - clock[T]) / wp.float64(p.coarse_stride)
         if remaining <= wp.float64(1.0e-12) * wp.max(wp.float64(1.0), clock[T]):
             dt = wp.float64(0.0)
         elif dt > remaining:
@@ -411,21 +412,60 @@ def _time_passes(scalar):
         ghost_o[k] = ghost[i]
         spawned_o[k] = spawned[i]
 
+    @wp.func
+    def short_of(t: wp.float64, target: wp.float64) -> bool:
+        """Whether time t is short of target beyond rounding (Solver.reached's complement)."""
+        return t < target - wp.float64(1.0e-12) * wp.max(wp.float64(1.0), target)
+
+    @wp.func
+    def every(count: int, period: int) -> int:
+        """1 when a cadence of ``period`` (0: never) falls on ``count``."""
+        if period > 0 and count % period == 0:
+            return 1
+        return 0
+
     @wp.kernel(enable_backward=False, module="unique")
     def tick(p: Params, fail: wp.array(dtype=wp.int32), clock: wp.array(dtype=wp.float64),
-             steps: wp.array(dtype=wp.int32)):
+             steps: wp.array(dtype=wp.int32), flags: wp.array(dtype=wp.int32), reorder_every: int,
+             census_every: int, shepard_every: int, block: int):
         """Advance time and step count (the finest level's steps), or record when the first failing
-        step would have ended."""
+        step would have ended; then say what comes next, on the device: whether the loop goes on
+        (healthy, short of the target, time moving, fewer than ``block`` steps since the host last
+        looked), whether the next step reorders and takes the census, and whether the Shepard
+        filter is due now (every ``shepard_every`` finest-level steps)."""
         m = p.coarse_stride
+        moving = clock[DT] > wp.float64(0.0)
         if healthy(fail):
-            if clock[DT] > wp.float64(0.0):
+            if moving:
                 clock[T] = clock[T] + wp.float64(m) * clock[DT]
                 steps[STEP] = steps[STEP] + m
         elif steps[FAILED_STEP] < 0:
             steps[FAILED_STEP] = steps[STEP] + m
             clock[T_FAILED] = clock[T] + wp.float64(m) * clock[DT]
+        launched = steps[LAUNCHED] + 1
+        steps[LAUNCHED] = launched
+        steps[IN_BLOCK] = steps[IN_BLOCK] + 1
+        flags[RUNNING] = 0
+        if healthy(fail) and moving and short_of(clock[T], clock[TARGET]) and steps[IN_BLOCK] < block:
+            flags[RUNNING] = 1
+        flags[REORDER_DUE] = every(launched, reorder_every)
+        flags[CENSUS_DUE] = every(launched, census_every)
+        flags[SHEPARD_DUE] = 0
+        if shepard_every > 0 and launched * m / shepard_every > (launched - 1) * m / shepard_every:
+            flags[SHEPARD_DUE] = 1
 
-    return SimpleNamespace(choose_dt=choose_dt, integrate=integrate, commit=commit, permute=permute, tick=tick)
+    @wp.kernel(enable_backward=False, module="unique")
+    def aim(fail: wp.array(dtype=wp.int32), clock: wp.array(dtype=wp.float64), steps: wp.array(dtype=wp.int32),
+            flags: wp.array(dtype=wp.int32), target: wp.float64):
+        """Start the step loop towards ``target``: it runs if the state is healthy and short of it."""
+        clock[TARGET] = target
+        steps[IN_BLOCK] = 0
+        flags[RUNNING] = 0
+        if healthy(fail) and short_of(clock[T], target):
+            flags[RUNNING] = 1
+
+    return SimpleNamespace(choose_dt=choose_dt, integrate=integrate, commit=commit, permute=permute, tick=tick,
+                           aim=aim)
 
 
 @functools.lru_cache(maxsize=None)

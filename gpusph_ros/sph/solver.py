@@ -1,8 +1,11 @@
 """The solver driver: owns the device state and launches the passes of each step.
 
 State is structure-of-arrays on one Warp device (``cpu`` or ``cuda:N``) in one precision.
-Inside the step loop nothing is copied to the host; every few steps a handful of scalars (time,
-dt, step count, health flags) is read to decide how many steps fit before the target time.
+The device drives the step loop: each step's size, whether it reorders, sorts, takes the census or
+filters, and when the loop stops at the target time are decided by the passes themselves (flags
+that ``wp.capture_if`` and ``wp.capture_while`` branch on), so nothing is copied to the host
+between two outputs and a captured graph can replay the loop. At the end the host reads a
+handful of scalars (time, dt, step count, health flags).
 """
 from __future__ import annotations
 
@@ -18,9 +21,29 @@ from .kernels import COARSER_LEVELS, EVERY_LEVEL, FINEST_LEVEL
 from .launch import Launcher
 from .neighbours import NeighbourList, NeighbourOverflow, default_max_neighbours
 from .particles import Particles
-from .state import DT, DT_STABLE, EXCLUDED, FAILED_STEP, FLUID, N_CLOCK, PASSIVE, STEP, T_FAILED, VACANT, T
+from .state import (
+    CENSUS_DUE,
+    DT,
+    DT_STABLE,
+    EXCLUDED,
+    FAILED_STEP,
+    FLUID,
+    N_CLOCK,
+    N_FLAGS,
+    PASSIVE,
+    REORDER_DUE,
+    RUNNING,
+    SHEPARD_DUE,
+    STEP,
+    T_FAILED,
+    VACANT,
+    T,
+)
 
-_MAX_BATCH = 64  # steps launched between two reads of the clock
+# steps between two looks of the host at an interruptible loop (a node asked to pause waits at most
+# these); a loop nobody interrupts runs to its target without the host
+_MAX_BATCH = 64
+_UNBOUNDED = 2 ** 31 - 1
 # steps between two sorts of the particle arrays into cell order: neighbours then sit next to each
 # other in memory, which the force passes (memory-bound on a CPU, coalesced on a GPU) need
 _REORDER_EVERY = 16
@@ -66,7 +89,6 @@ class Solver:
                                                                                   self.params.coarse_stride),
                                         self.launch, self.hsml, self.params.variable_h != 0,
                                         self.params.coarse_stride)
-        self._launched = 0
         self._step_hooks = []
         self.time, self.dt, self.dt_stable, self.steps = 0.0, 0.0, 0.0, 0
         self._excluded_host = (np.zeros(health.N_REASONS, dtype=np.int32), np.array([0.0, -1.0]))
@@ -167,7 +189,12 @@ class Solver:
         self._excluded = wp.zeros(health.N_REASONS, dtype=wp.int32, device=dev)
         self._excluded_mass = arr(np.array([0.0, -1.0]), wp.float64)
         self._clock = wp.zeros(N_CLOCK, dtype=wp.float64, device=dev)  # slots state.T, DT, DT_STABLE, T_FAILED
-        self._steps = arr(np.array([0, -1], dtype=np.int32), wp.int32)  # slots state.STEP, FAILED_STEP
+        self._steps = arr(np.array([0, -1, 0, 0], dtype=np.int32), wp.int32)  # slots state.STEP ... IN_BLOCK
+        # the step loop's flags (state.RUNNING ...): the first step reorders and takes the census
+        flags = np.zeros(N_FLAGS, dtype=np.int32)
+        flags[[REORDER_DUE, CENSUS_DUE]] = 1
+        self._flags = arr(flags, wp.int32)
+        self._flag = tuple(self._flags[k:k + 1] for k in range(N_FLAGS))  # each a branch's condition
         wp.launch(self._passes.equation_of_state, dim=n, inputs=[self.params, self.fields], device=dev)
         self.boundary.prepare(self)
         if cfg.zones:
@@ -213,15 +240,17 @@ class Solver:
             wp.copy(dst, src)
         self.neighbours.rebuild_sorted(self.pos)
 
-    def _launch_step(self, t_target: float):
+    def _launch_step(self, block: int = _UNBOUNDED):
+        """One step towards the clock's TARGET, every decision in it taken on the device (the
+        branches on the step loop's flags), so that a captured graph can replay it. ``block``:
+        how many steps since the loop started the device may take before it stops for the host."""
         n, dev, p, k = self.n, self.device, self.params, self._passes
-        if self._launched % _REORDER_EVERY == 0:
-            self._reorder()
+        wp.capture_if(self._flag[REORDER_DUE], on_true=self._reorder)
         self.neighbours.rebuild(self.pos)
         self._maxima.zero_()
         self.boundary.before_forces(self, self.fields)
         self._forces(self.fields)
-        wp.launch(k.choose_dt, dim=1, inputs=[p, t_target, self._maxima, self._fail, self._clock], device=dev)
+        wp.launch(k.choose_dt, dim=1, inputs=[p, self._maxima, self._fail, self._clock], device=dev)
         state, half, candidate = (self.pos, self.vel, self.rho), self._half, self._candidate
         if p.coarse_stride == 1:
             self._integrate(0.5, state, self.vel, half)
@@ -234,17 +263,7 @@ class Solver:
                   inputs=[p, self.pos, self._pos_c, self._vel_c, self._rho_c, self.mass, self.hsml, self.ptype,
                           self.ids, self.solid_lo, self.solid_hi, self._fail, self._faulty, self._pending,
                           self._pending_mass], device=dev)
-        if self._launched % _CENSUS_EVERY == 0:
-            self._energy_sum[health.ENERGY:health.ENERGY + 1].zero_()
-            wp.launch(k.census, dim=n, inputs=[p, self._pos_c, self._vel_c, self._rho_c, self.mass, self.ptype,
-                                               self.ids, self._clumped, self._faulty, self.solid_lo,
-                                               self.solid_hi, self._energy_sum, self._clump_count], device=dev)
-            if self.boundary.repulsive and self.n > self.n_fluid:
-                nl = self.neighbours
-                self.launch(k.wall_energy, n, [p, nl.grid, nl.nbr, nl.count, self._pos_c, self.mass, self.ptype,
-                                               self._energy_sum])
-            wp.launch(k.census_check, dim=1, inputs=[p, self._energy_sum, self._clump_count, self._fail],
-                      device=dev)
+        wp.capture_if(self._flag[CENSUS_DUE], on_true=self._census)
         wp.launch(k.exclusion_check, dim=1, inputs=[p, self._clock, self._pending, self._pending_mass,
                                                     self._excluded, self._excluded_mass, self._fail], device=dev)
         wp.launch(k.commit, dim=n, inputs=[self._fail, self._faulty, self._pos_c, self._vel_c, self._rho_c, self.pos,
@@ -254,12 +273,24 @@ class Solver:
             self._relevel()
         for hook in self._step_hooks:
             hook()
-        wp.launch(k.tick, dim=1, inputs=[p, self._fail, self._clock, self._steps], device=dev)
+        wp.launch(k.tick, dim=1, inputs=[p, self._fail, self._clock, self._steps, self._flags, _REORDER_EVERY,
+                                         _CENSUS_EVERY, self.config.shepard_every, block], device=dev)
         self.neighbours.moved(self.pos, self.vel, self._clock)
-        self._launched += 1
-        every, m = self.config.shepard_every, self.params.coarse_stride
-        if every and self._launched * m // every > (self._launched - 1) * m // every:  # every `every` fine steps
-            self.shepard_filter(rebuild=False)
+        wp.capture_if(self._flag[SHEPARD_DUE], on_true=self.shepard_filter, rebuild=False)
+
+    def _census(self):
+        """The fluid's energy and clumping, checked against the run's limits (health.census)."""
+        n, p, k = self.n, self.params, self._passes
+        self._energy_sum[health.ENERGY:health.ENERGY + 1].zero_()
+        wp.launch(k.census, dim=n, inputs=[p, self._pos_c, self._vel_c, self._rho_c, self.mass, self.ptype,
+                                           self.ids, self._clumped, self._faulty, self.solid_lo,
+                                           self.solid_hi, self._energy_sum, self._clump_count], device=self.device)
+        if self.boundary.repulsive and self.n > self.n_fluid:
+            nl = self.neighbours
+            self.launch(k.wall_energy, n, [p, nl.grid, nl.nbr, nl.count, self._pos_c, self.mass, self.ptype,
+                                           self._energy_sum])
+        wp.launch(k.census_check, dim=1, inputs=[p, self._energy_sum, self._clump_count, self._fail],
+                  device=self.device)
 
     def each_step(self, hook):
         """Call ``hook()`` at the end of every step, before the clock ticks: a measurement that
@@ -445,32 +476,44 @@ class Solver:
     def advance(self, t_target: float, interrupt=None) -> float:
         """Step until the simulated time reaches ``t_target`` exactly; returns the time.
 
-        ``interrupt``, a callable, is asked before each step: when it answers true the solver
-        stops early, between two steps (a node pausing mid-interval); ``reached`` tells.
+        The device runs the loop (``wp.capture_while`` on its RUNNING flag): it decides each step's
+        size, when to stop and what each step does, and the host reads the clock and the health
+        flags once, at the end. ``interrupt``, a callable, is asked before each step (on a CPU,
+        where the loop's flag is read in place) or every _MAX_BATCH steps (on a GPU, where reading
+        it waits for the device): when it answers true the solver stops early, between two steps
+        (a node pausing mid-interval); ``reached`` tells.
         Raises HealthError when a step fails a check; the state is then the last healthy one.
         """
         self._sync()
-        while not self.reached(t_target):
-            batch = 1
-            if self.dt_stable > 0.0:
-                span = self.params.coarse_stride * self.dt_stable  # what one launched step covers
-                batch = int(min(_MAX_BATCH, max(1, 0.9 * (t_target - self.time) / span)))
-            before = self.time
-            for _ in range(batch):
-                if interrupt is not None and interrupt():
-                    break
-                self._launch_step(t_target)
+        if self.reached(t_target):
+            return self.time
+        before = self.time
+        block = _UNBOUNDED if interrupt is None or self.device.is_cpu else _MAX_BATCH
+        while True:
+            wp.launch(self._passes.aim, dim=1, inputs=[self._fail, self._clock, self._steps, self._flags,
+                                                       float(t_target)], device=self.device)
+            wp.capture_while(self._flag[RUNNING], self._loop_body, block=block,
+                             interrupt=interrupt if self.device.is_cpu else None)
             self._sync()
-            if interrupt is not None and interrupt():
+            if self.reached(t_target) or (interrupt is not None and interrupt()):
                 break
             if self.time <= before:
                 raise RuntimeError(f"simulated time is stuck at {self.time!r} s short of {t_target!r} s")
+            before = self.time
         return self.time
+
+    def _loop_body(self, block: int, interrupt=None):
+        if interrupt is not None and interrupt():
+            self._flags[RUNNING:RUNNING + 1].zero_()
+            return
+        self._launch_step(block)
 
     def step(self) -> float:
         """One step of the adaptive size (or dt_fixed); returns the new time."""
         self._sync()
-        self._launch_step(math.inf)
+        wp.launch(self._passes.aim, dim=1, inputs=[self._fail, self._clock, self._steps, self._flags, math.inf],
+                  device=self.device)
+        self._launch_step()
         self._sync()
         return self.time
 
@@ -490,7 +533,9 @@ class Solver:
         self._fail.assign(np.full(health.N_CHECKS, health.NO_FAILURE, dtype=np.int32))
         self._pending.zero_()
         self._pending_mass.zero_()
-        self._steps.assign(np.array([self._steps.numpy()[STEP], -1], dtype=np.int32))
+        steps = self._steps.numpy()
+        steps[FAILED_STEP] = -1
+        self._steps.assign(steps)
         self.neighbours.overflow.zero_()
 
     # -- state out ------------------------------------------------------------------------

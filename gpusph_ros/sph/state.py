@@ -24,11 +24,17 @@ def carries_fluid(t: wp.int32) -> bool:
     return t == FLUID or t == PASSIVE
 
 # slots of the device clock (float64): the time, the step about to be taken, the step the stability
-# limits allow, and when the first failed step would have ended
-T, DT, DT_STABLE, T_FAILED = range(4)
-N_CLOCK = 4
-# slots of the step counter: steps taken, and the first failed step (-1 while none)
-STEP, FAILED_STEP = range(2)
+# limits allow, when the first failed step would have ended, and the time the steps run to
+T, DT, DT_STABLE, T_FAILED, TARGET = range(5)
+N_CLOCK = 5
+# slots of the step counter: steps taken (the finest level's), the first failed step (-1 while
+# none), steps launched, and steps launched since the host last started the loop
+STEP, FAILED_STEP, LAUNCHED, IN_BLOCK = range(4)
+N_STEPS = 4
+# slots of the step loop's flags, each the condition of a branch of the step (wp.capture_if) or of
+# the loop (wp.capture_while): go on stepping, and which passes this step or its end are due
+RUNNING, REORDER_DUE, CENSUS_DUE, SHEPARD_DUE = range(4)
+N_FLAGS = 4
 
 
 @functools.lru_cache(maxsize=None)
