@@ -13,7 +13,7 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
-from . import boundaries, density, kernels, neighbours, viscosity
+from . import boundaries, density, graph, kernels, neighbours, viscosity
 from .device import default_device
 
 # the names of each family's models, owned by its module
@@ -23,6 +23,7 @@ BOUNDARIES = boundaries.NAMES
 MDBC_SLIPS = boundaries.mdbc.SLIPS
 DENSITY_DIFFUSIONS = density.DIFFUSIONS
 PRECISIONS = ("float32", "float64")
+STEP_GRAPHS = graph.STEP_GRAPHS
 
 # guards against runs that could never finish or never fit (docs/limits.md)
 MIN_CFL = 0.01  # a smaller Courant number takes > 100x the steps of the default for no accuracy
@@ -196,6 +197,10 @@ class Numerics:
                              applies=RESET, node=True)
     device: str = setting(None, "Warp device: cpu or cuda:N", applies=RESET, node=True, factory=default_device)
     cpu_threads: int = setting(0, "threads for the heavy passes on a CPU device; 0 = every core", applies=RESET)
+    step_graph: str = setting("auto", "replay the step loop from a captured graph (sph/graph.py): auto (on a GPU "
+                                      "and on one CPU thread; on more, the eager loop spreads the heavy passes over "
+                                      "them), on, off",
+                              choices=STEP_GRAPHS)
     max_particles: int = setting(MAX_PARTICLES, "a scene whose spacing needs more particles is refused before "
                                                 "any allocation")
 

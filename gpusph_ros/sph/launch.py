@@ -10,6 +10,7 @@ particles cost very different amounts and lie in separate index ranges, so conti
 would leave one core idle. A kernel that reduces (maxima) keeps one slot per chunk, because CPU
 atomics are not atomic across these threads.
 """
+import contextlib
 import os
 from concurrent.futures import ThreadPoolExecutor
 
@@ -24,9 +25,20 @@ class Launcher:
         self.threads = max(1, threads or os.cpu_count() or 1)
         self._pool = ThreadPoolExecutor(self.threads) if self.threads > 1 else None
         self._loaded = set()
+        self._serial = False
+
+    @contextlib.contextmanager
+    def serial(self):
+        """Every launch from the calling thread, in one piece: a graph capture records only the
+        launches of the thread that captures (graph.py)."""
+        self._serial = True
+        try:
+            yield
+        finally:
+            self._serial = False
 
     def __call__(self, kernel, n: int, inputs: list):
-        if self._pool is None or n < 2 * self.threads or kernel not in self._loaded:
+        if self._pool is None or self._serial or n < 2 * self.threads or kernel not in self._loaded:
             # one thread; a kernel's first launch also loads its module, which must not race
             wp.launch(kernel, dim=n, inputs=[*inputs, 0, 1], device=self.device)
             self._loaded.add(kernel)

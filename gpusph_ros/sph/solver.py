@@ -14,7 +14,7 @@ import math
 import numpy as np
 import warp as wp
 
-from . import boundaries, density, eos, health, kernels, levels, passes, shifting, viscosity, xsph
+from . import boundaries, density, eos, graph, health, kernels, levels, passes, shifting, viscosity, xsph
 from .config import RESET_FIELDS, SolverConfig, check_device
 from .health import HealthError
 from .kernels import COARSER_LEVELS, EVERY_LEVEL, FINEST_LEVEL
@@ -90,6 +90,7 @@ class Solver:
                                         self.launch, self.hsml, self.params.variable_h != 0,
                                         self.params.coarse_stride)
         self._step_hooks = []
+        self._graph = graph.LoopGraph(self)
         self.time, self.dt, self.dt_stable, self.steps = 0.0, 0.0, 0.0, 0
         self._excluded_host = (np.zeros(health.N_REASONS, dtype=np.int32), np.array([0.0, -1.0]))
         self._census_host = np.array(health.CENSUS_START)  # as of the last sync
@@ -194,7 +195,7 @@ class Solver:
         flags = np.zeros(N_FLAGS, dtype=np.int32)
         flags[[REORDER_DUE, CENSUS_DUE]] = 1
         self._flags = arr(flags, wp.int32)
-        self._flag = tuple(self._flags[k:k + 1] for k in range(N_FLAGS))  # each a branch's condition
+        self._flag_views = tuple(self._flags[k:k + 1] for k in range(N_FLAGS))
         wp.launch(self._passes.equation_of_state, dim=n, inputs=[self.params, self.fields], device=dev)
         self.boundary.prepare(self)
         if cfg.zones:
@@ -245,7 +246,7 @@ class Solver:
         branches on the step loop's flags), so that a captured graph can replay it. ``block``:
         how many steps since the loop started the device may take before it stops for the host."""
         n, dev, p, k = self.n, self.device, self.params, self._passes
-        wp.capture_if(self._flag[REORDER_DUE], on_true=self._reorder)
+        wp.capture_if(self.flag(REORDER_DUE), on_true=self._reorder)
         self.neighbours.rebuild(self.pos)
         self._maxima.zero_()
         self.boundary.before_forces(self, self.fields)
@@ -263,7 +264,7 @@ class Solver:
                   inputs=[p, self.pos, self._pos_c, self._vel_c, self._rho_c, self.mass, self.hsml, self.ptype,
                           self.ids, self.solid_lo, self.solid_hi, self._fail, self._faulty, self._pending,
                           self._pending_mass], device=dev)
-        wp.capture_if(self._flag[CENSUS_DUE], on_true=self._census)
+        wp.capture_if(self.flag(CENSUS_DUE), on_true=self._census)
         wp.launch(k.exclusion_check, dim=1, inputs=[p, self._clock, self._pending, self._pending_mass,
                                                     self._excluded, self._excluded_mass, self._fail], device=dev)
         wp.launch(k.commit, dim=n, inputs=[self._fail, self._faulty, self._pos_c, self._vel_c, self._rho_c, self.pos,
@@ -276,7 +277,7 @@ class Solver:
         wp.launch(k.tick, dim=1, inputs=[p, self._fail, self._clock, self._steps, self._flags, _REORDER_EVERY,
                                          _CENSUS_EVERY, self.config.shepard_every, block], device=dev)
         self.neighbours.moved(self.pos, self.vel, self._clock)
-        wp.capture_if(self._flag[SHEPARD_DUE], on_true=self.shepard_filter, rebuild=False)
+        wp.capture_if(self.flag(SHEPARD_DUE), on_true=self.shepard_filter, rebuild=False)
 
     def _census(self):
         """The fluid's energy and clumping, checked against the run's limits (health.census)."""
@@ -297,6 +298,7 @@ class Solver:
         accumulates on the device over the steps between its samples (measure/forces.py). It may
         only launch: it runs inside the step, where the host reads nothing."""
         self._step_hooks.append(hook)
+        self._graph.drop()
 
     @property
     def clock(self):
@@ -476,24 +478,26 @@ class Solver:
     def advance(self, t_target: float, interrupt=None) -> float:
         """Step until the simulated time reaches ``t_target`` exactly; returns the time.
 
-        The device runs the loop (``wp.capture_while`` on its RUNNING flag): it decides each step's
-        size, when to stop and what each step does, and the host reads the clock and the health
-        flags once, at the end. ``interrupt``, a callable, is asked before each step (on a CPU,
-        where the loop's flag is read in place) or every _MAX_BATCH steps (on a GPU, where reading
-        it waits for the device): when it answers true the solver stops early, between two steps
-        (a node pausing mid-interval); ``reached`` tells.
+        The device runs the loop (``wp.capture_while`` on its RUNNING flag, or its captured graph:
+        graph.py): it decides each step's size, when to stop and what each step does, and the host
+        reads the clock and the health flags once, at the end. ``interrupt``, a callable, is asked
+        before each step of the eager loop, and every _MAX_BATCH steps of a replayed one: when it
+        answers true the solver stops early, between two steps (a node pausing mid-interval);
+        ``reached`` tells.
         Raises HealthError when a step fails a check; the state is then the last healthy one.
         """
         self._sync()
         if self.reached(t_target):
             return self.time
         before = self.time
-        block = _UNBOUNDED if interrupt is None or self.device.is_cpu else _MAX_BATCH
+        replay = graph.wanted(self.config.step_graph, self.device, self.launch.threads)
+        block = _MAX_BATCH if replay and interrupt is not None else _UNBOUNDED
         while True:
-            wp.launch(self._passes.aim, dim=1, inputs=[self._fail, self._clock, self._steps, self._flags,
-                                                       float(t_target)], device=self.device)
-            wp.capture_while(self._flag[RUNNING], self._loop_body, block=block,
-                             interrupt=interrupt if self.device.is_cpu else None)
+            self.aim(t_target)
+            if replay:
+                self._graph.run(block)
+            else:
+                wp.capture_while(self.flag(RUNNING), self.loop_body, block=block, interrupt=interrupt)
             self._sync()
             if self.reached(t_target) or (interrupt is not None and interrupt()):
                 break
@@ -502,7 +506,17 @@ class Solver:
             before = self.time
         return self.time
 
-    def _loop_body(self, block: int, interrupt=None):
+    def aim(self, t_target: float):
+        """Point the step loop at ``t_target``: it runs while the state is healthy and short of it."""
+        wp.launch(self._passes.aim, dim=1, inputs=[self._fail, self._clock, self._steps, self._flags,
+                                                   float(t_target)], device=self.device)
+
+    def flag(self, slot: int) -> wp.array:
+        """The step loop's flag ``slot`` (state.RUNNING ...) as the one-element array a branch reads."""
+        return self._flag_views[slot]
+
+    def loop_body(self, block: int, interrupt=None):
+        """One pass of the step loop: a step, unless ``interrupt`` asks to stop (which ends the loop)."""
         if interrupt is not None and interrupt():
             self._flags[RUNNING:RUNNING + 1].zero_()
             return
@@ -511,8 +525,7 @@ class Solver:
     def step(self) -> float:
         """One step of the adaptive size (or dt_fixed); returns the new time."""
         self._sync()
-        wp.launch(self._passes.aim, dim=1, inputs=[self._fail, self._clock, self._steps, self._flags, math.inf],
-                  device=self.device)
+        self.aim(math.inf)
         self._launch_step()
         self._sync()
         return self.time
@@ -527,6 +540,7 @@ class Solver:
             raise ValueError(f"{', '.join(needs_rebuild)}: changing this needs new particles; build a new solver")
         self.config = self.config.replace(**changes).validate()
         self.params = self._make_params()
+        self._graph.drop()
 
     def clear_failure(self):
         """Forget a reported failure so the run can go on (e.g. after changing dt_fixed)."""
