@@ -1,4 +1,5 @@
-"""Neighbour lists against brute force, with a periodic axis (minimum image)."""
+"""Neighbour lists against brute force, with a periodic axis (minimum image); the GPU's layout against
+the CPU's, bit for bit; and no 32-bit product of a particle index and the list width in any kernel."""
 import numpy as np
 import pytest
 
@@ -22,7 +23,7 @@ def test_lists_match_brute_force(precision):
     solver.mean_neighbours()
     nl = solver.neighbours
     count = nl.count.numpy()
-    nbr = nl.nbr.numpy().reshape(n, nl.max_neighbours)
+    nbr = nl.nbr.numpy()
     radius = nl.skin * 2.0 * cfg.h
     sep = pos[:, None, :] - pos[None, :, :]
     sep[..., 0] -= 0.1 * np.round(sep[..., 0] / 0.1)
@@ -57,7 +58,7 @@ def test_two_levels_lists_match_brute_force():
     assert nl.grid.reach == 2  # the coarse level's radius is two cells
     nl.rebuild(solver.pos, force=True)
     count = nl.count.numpy()
-    nbr = nl.nbr.numpy().reshape(n, nl.max_neighbours)
+    nbr = nl.nbr.numpy()
     h = cfg.hdx * spacing
     sep = pos[:, None, :] - pos[None, :, :]
     sep[..., 0] -= 0.12 * np.round(sep[..., 0] / 0.12)
@@ -72,3 +73,56 @@ def test_two_levels_lists_match_brute_force():
         got = set(nbr[i, :count[i]].tolist())
         assert got == expected, f"particle {i}: missing {sorted(expected - got)[:5]}, extra {sorted(got - expected)}"
     assert any(count[i] > 0 and ptype[i] == PASSIVE and h[i] == h.max() for i in range(n))
+
+
+def test_neighbour_major_lists_step_bit_identically_to_particle_major():
+    """The layout a GPU takes (neighbour-major, read through a transposed view) holds the same lists
+    and gives the same steps as the CPU's, bit for bit."""
+    from gpusph_ros.scenes.build import build
+    from gpusph_ros.scenes.schema import parse_scene
+    from gpusph_ros.sph.neighbours import lists_array
+
+    scene = parse_scene({"name": "tank", "dim": 2, "tank": [0.6, 0.32],
+                         "fluid": [{"name": "water", "lo": [0.0, 0.0], "hi": [0.12, 0.2]}]})
+    states = []
+    for major in (False, True):
+        solver = build(scene, dx=0.01, boundary="mdbc").solver()
+        nl = solver.neighbours
+        nl.nbr = lists_array(nl.n, nl.max_neighbours, nl.device, major)
+        assert nl.nbr.is_contiguous != major and nl.nbr.shape == (nl.n, nl.max_neighbours)
+        solver.advance(0.03)
+        states.append((solver.steps, nl.count.numpy().copy(), nl.nbr.numpy().copy(), solver.snapshot()))
+    (steps_a, count_a, nbr_a, snap_a), (steps_b, count_b, nbr_b, snap_b) = states
+    assert steps_a == steps_b > 50
+    used = np.arange(nbr_a.shape[1])[None, :] < count_a[:, None]
+    np.testing.assert_array_equal(count_a, count_b)
+    np.testing.assert_array_equal(nbr_a[used], nbr_b[used])
+    for name in ("pos", "vel", "rho"):
+        np.testing.assert_array_equal(snap_a[name], snap_b[name])
+
+
+def test_no_kernel_forms_a_particle_times_list_width_index():
+    """Every kernel and device function reads the lists as nbr[i, k] (a 2D array: 32-bit indices, a
+    64-bit byte offset) and none multiplies by the list width, which in 32 bits passed 2^31 at
+    8.7 M particles of 3D lists."""
+    import ast
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1] / "gpusph_ros"
+    device_functions, reads = 0, 0
+    for path in sorted(root.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if not isinstance(node, ast.FunctionDef) or not any(
+                    "wp.kernel" in ast.unparse(d) or "wp.func" in ast.unparse(d) for d in node.decorator_list):
+                continue
+            device_functions += 1
+            for inner in ast.walk(node):
+                if isinstance(inner, ast.BinOp) and isinstance(inner.op, ast.Mult):
+                    assert "max_neighbours" not in ast.unparse(inner), f"{path.name}: {ast.unparse(inner)}"
+                if isinstance(inner, ast.Subscript) and ast.unparse(inner.value) == "nbr":
+                    reads += 1
+                    assert isinstance(inner.slice, ast.Tuple) and len(inner.slice.elts) == 2, \
+                        f"{path.name} {node.name}: {ast.unparse(inner)}"
+                if isinstance(inner, ast.arg) and inner.arg == "nbr":
+                    assert "array2d" in ast.unparse(inner.annotation), f"{path.name} {node.name}"
+    assert device_functions > 50 and reads >= 9

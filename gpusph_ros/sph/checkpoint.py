@@ -76,7 +76,7 @@ def capture(solver) -> dict:
     wp.synchronize_device(solver.device)
     arrays = {path: a.numpy().copy() for path, a in _stored(solver).items()}
     nl = solver.neighbours
-    arrays[LISTS] = nl.nbr.numpy().reshape(nl.n, nl.max_neighbours)[_used(nl, arrays["neighbours.count"])]
+    arrays[LISTS] = nl.nbr.numpy()[_used(nl, arrays["neighbours.count"])]
     return {"arrays": arrays, "host": _host(solver)}
 
 
@@ -124,9 +124,9 @@ def put(solver, state: dict):
     for path, target in _stored(solver).items():
         wp.copy(target, wp.array(state["arrays"][path], dtype=target.dtype, device=target.device))
     nl = solver.neighbours
-    lists = nl.nbr.numpy().reshape(nl.n, nl.max_neighbours)
+    lists = np.array(nl.nbr.numpy())
     lists[_used(nl, state["arrays"]["neighbours.count"])] = state["arrays"][LISTS]
-    nl.nbr.assign(lists.ravel())
+    nl.nbr.assign(lists)
     for holder, obj in (("solver", solver), ("neighbours", nl)):
         for name, value in state["host"][holder].items():
             setattr(obj, name, value)

@@ -55,7 +55,7 @@ def build(scalar):
         return delta_hc0 * psi * m_b / rho_b
 
     @wp.func
-    def shepard(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32), i: int,
+    def shepard(p: Params, grid: Grid, nbr: wp.array2d(dtype=wp.int32), count: wp.array(dtype=wp.int32), i: int,
                 f: Fields) -> scalar:
         """The Shepard density of particle i over its neighbour list (the walls' particles too
         where they carry a fluid volume)."""
@@ -63,9 +63,8 @@ def build(scalar):
         w0 = kernel_w(p.kernel, norm, inv_h, scalar(0.0))
         num = f.mass[i] * w0
         den = f.mass[i] / f.rho[i] * w0
-        base = i * grid.max_neighbours
         for k in range(count[i]):
-            j = nbr[base + k]
+            j = nbr[i, k]
             # the lists may still hold a particle excluded this step
             t_j = f.ptype[j]
             if (state.carries_fluid(t_j) or (p.wall_volume != 0 and t_j == BOUNDARY)) \

@@ -139,7 +139,7 @@ def build(scalar):
         return finer, own, child
 
     @wp.kernel(enable_backward=False, module="unique")
-    def passive_state(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32),
+    def passive_state(p: Params, grid: Grid, nbr: wp.array2d(dtype=wp.int32), count: wp.array(dtype=wp.int32),
                       f: Fields, zone_lo: wp.array(dtype=vec), zone_hi: wp.array(dtype=vec),
                       zone_h: wp.array(dtype=scalar), level_h: scalar, chunk: int, stride: int):
         """Each passive particle of the level of smoothing length ``level_h``: its density (first
@@ -155,9 +155,8 @@ def build(scalar):
             return
         x = f.pos[i]
         a, rhs, u = no_sums()
-        base = i * grid.max_neighbours
         for k in range(count[i]):
-            j = nbr[base + k]
+            j = nbr[i, k]
             h_j = f.hsml[j]
             donor = f.ptype[j] == FLUID and not same_level(p, h_i, h_j)
             if f.ptype[j] == PASSIVE and h_j < h_i * scalar(0.999) and not finest_level(p, h_j):

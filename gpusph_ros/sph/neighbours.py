@@ -227,7 +227,7 @@ def build(scalar):
     def neighbour_list(grid: Grid, pos_sorted: wp.array(dtype=vec), ptype_sorted: wp.array(dtype=wp.int32),
                        hsml_sorted: wp.array(dtype=scalar), order: wp.array(dtype=wp.int32),
                        start: wp.array(dtype=wp.int32),
-                       end: wp.array(dtype=wp.int32), nbr: wp.array(dtype=wp.int32),
+                       end: wp.array(dtype=wp.int32), nbr: wp.array2d(dtype=wp.int32),
                        count: wp.array(dtype=wp.int32), needs_list: wp.array(dtype=wp.int32),
                        ghost: wp.array(dtype=vec), x_build: wp.array(dtype=vec),
                        overflow: wp.array(dtype=wp.int32), chunk: int, stride: int):
@@ -263,7 +263,6 @@ def build(scalar):
                         r_ax = wp.min(r_ax, (grid.dims[ax] - 1) / 2)
                     reach[ax] = r_ax
         n = int(0)
-        base = i * grid.max_neighbours
         for dz in range(-reach[2], reach[2] + 1):
             for dy in range(-reach[1], reach[1] + 1):
                 for dx in range(-reach[0], reach[0] + 1):
@@ -295,7 +294,7 @@ def build(scalar):
                                     near = wp.dot(rg, rg) < radius2
                                 if near:
                                     if n < grid.max_neighbours:
-                                        nbr[base + n] = order[k]
+                                        nbr[i, n] = order[k]
                                     n += 1
         if n > grid.max_neighbours:
             wp.atomic_max(overflow, 0, n)
@@ -308,17 +307,30 @@ def build(scalar):
                            mark_built=mark_built)
 
 
+def lists_array(n: int, width: int, device, neighbour_major: bool) -> wp.array:
+    """The lists, ``nbr[i, k]`` the k-th neighbour of particle i, a 2D array: each index is 32-bit
+    and the byte offset 64-bit (Warp's strides), so no kernel forms i x width in 32 bits, which
+    passed 2^31 at 8.7 M particles of 3D lists. Neighbour-major on a GPU (stored as width x n, read
+    through a transposed view): the threads of a warp, consecutive particles, read their k-th
+    neighbours from consecutive addresses. Particle-major on a CPU, where one thread walks one
+    particle's list."""
+    if neighbour_major:
+        return wp.zeros((width, n), dtype=wp.int32, device=device).transpose()
+    return wp.zeros((n, width), dtype=wp.int32, device=device)
+
+
 class NeighbourList:
     """Owns the cell grid and the per-particle neighbour lists of one solver on one device."""
 
     def __init__(self, scalar, dim: int, support: float, lo, hi, periodic, ptype: wp.array,
                  needs_list: wp.array, ghost: wp.array, max_neighbours: int, launcher, hsml: wp.array,
-                 variable: bool = False, substeps: int = 1):
+                 variable: bool = False, substeps: int = 1, neighbour_major: "bool | None" = None):
         """``ptype``, ``needs_list`` and ``ghost`` (each particle's ghost-node offset, see
         neighbour_list) are the solver's own device arrays (it may reorder them); ``hsml``, each
         particle's smoothing length, which a pair's radius follows where ``variable`` (they differ:
         ``support`` is then the largest's); ``substeps``, the finest level's steps one launched
-        step spans (2 with multirate), whose force passes all read these lists."""
+        step spans (2 with multirate), whose force passes all read these lists;
+        ``neighbour_major``, the lists' layout (lists_array), by default the device's."""
         self._passes = build(scalar)
         Grid = self._passes.Grid
         n = needs_list.shape[0]
@@ -360,7 +372,8 @@ class NeighbourList:
         self._order = wp.zeros(2 * n, dtype=wp.int32, device=device)
         self._start = wp.zeros(ncells, dtype=wp.int32, device=device)
         self._end = wp.zeros(ncells, dtype=wp.int32, device=device)
-        self.nbr = wp.zeros(n * max_neighbours, dtype=wp.int32, device=device)
+        self.neighbour_major = device.is_cuda if neighbour_major is None else neighbour_major
+        self.nbr = lists_array(n, max_neighbours, device, self.neighbour_major)
         self.count = wp.zeros(n, dtype=wp.int32, device=device)
         self.overflow = wp.zeros(1, dtype=wp.int32, device=device)
         self._needs_list = needs_list

@@ -130,7 +130,7 @@ def _force_passes(scalar):
         f.p_rho2[i] = pr / (r * r)
 
     @wp.kernel(enable_backward=False, module="unique")
-    def sps_strain(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32),
+    def sps_strain(p: Params, grid: Grid, nbr: wp.array2d(dtype=wp.int32), count: wp.array(dtype=wp.int32),
                    f: Fields, levels: int, chunk: int, threads: int):
         i = wp.tid() * threads + chunk
         zero = vec(scalar(0.0))
@@ -141,9 +141,8 @@ def _force_passes(scalar):
             f.tau_off[i] = zero
             return
         grad_u = mat33(scalar(0.0))
-        base = i * grid.max_neighbours
         for k in range(count[i]):
-            j = nbr[base + k]
+            j = nbr[i, k]
             if (carries_fluid(f.ptype[j]) or p.wall_volume != 0) and same_level(p, f.hsml[i], f.hsml[j]):
                 r_ab = separation(grid, f.pos[i], f.pos[j])
                 r = wp.length(r_ab)
@@ -158,7 +157,7 @@ def _force_passes(scalar):
         f.tau_off[i] = o
 
     @wp.kernel(enable_backward=False, module="unique")
-    def interact(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32), f: Fields,
+    def interact(p: Params, grid: Grid, nbr: wp.array2d(dtype=wp.int32), count: wp.array(dtype=wp.int32), f: Fields,
                  plane_point: wp.array(dtype=vec), plane_normal: wp.array(dtype=vec),
                  acc: wp.array(dtype=vec), drho: wp.array(dtype=scalar), xsph: wp.array(dtype=vec),
                  shift: wp.array(dtype=vec), maxima: wp.array(dtype=scalar), clumped: wp.array(dtype=wp.int32),
@@ -170,7 +169,6 @@ def _force_passes(scalar):
         if not selected(p, f.hsml[i], levels):
             return
         xi = f.pos[i]
-        base = i * grid.max_neighbours
         a = vec(scalar(0.0))
         dr = scalar(0.0)
         xs = vec(scalar(0.0))
@@ -183,7 +181,7 @@ def _force_passes(scalar):
             mu_max = scalar(0.0)
             clump_r = p.clump_r * scale_i
             for k in range(count[i]):
-                j = nbr[base + k]
+                j = nbr[i, k]
                 r_ij = separation(grid, xi, f.pos[j])
                 if carries_fluid(f.ptype[j]) and same_level(p, f.hsml[i], f.hsml[j]) \
                         and wp.dot(r_ij, r_ij) < clump_r * clump_r:
@@ -230,7 +228,7 @@ def _force_passes(scalar):
             # wall would integrate its drift
             ui = f.vel[i]
             for k in range(count[i]):
-                j = nbr[base + k]
+                j = nbr[i, k]
                 if f.ptype[j] == FLUID and same_level(p, f.hsml[j], f.hsml[i]):
                     r_ji = separation(grid, f.pos[j], xi)
                     r = wp.length(r_ji)
@@ -251,7 +249,7 @@ def _force_passes(scalar):
         clumped[i] = close
 
     @wp.kernel(enable_backward=False, module="unique")
-    def wall_energy(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32),
+    def wall_energy(p: Params, grid: Grid, nbr: wp.array2d(dtype=wp.int32), count: wp.array(dtype=wp.int32),
                     pos: wp.array(dtype=vec), mass: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
                     total: wp.array(dtype=wp.float64), chunk: int, stride: int):
         """total[ENERGY] += the energy the repulsive walls (Lennard-Jones, Monaghan-Kajtar) hold, so that
@@ -261,16 +259,15 @@ def _force_passes(scalar):
         if ptype[i] != FLUID:
             return
         e = scalar(0.0)
-        base = i * grid.max_neighbours
         for k in range(count[i]):
-            j = nbr[base + k]
+            j = nbr[i, k]
             if ptype[j] == BOUNDARY:
                 e += repulsion_potential(p, mass[i], mass[j], wp.length(separation(grid, pos[i], pos[j])))
         if e > scalar(0.0):
             wp.atomic_add(total, ENERGY, wp.float64(mass[i] * e))
 
     @wp.kernel(enable_backward=False, module="unique")
-    def shepard(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32), f: Fields,
+    def shepard(p: Params, grid: Grid, nbr: wp.array2d(dtype=wp.int32), count: wp.array(dtype=wp.int32), f: Fields,
                 rho_out: wp.array(dtype=scalar), chunk: int, stride: int):
         """The Shepard filter (density.shepard, thesis Eq. 2.28) on the fluid; boundaries keep theirs."""
         i = wp.tid() * stride + chunk

@@ -601,7 +601,7 @@ class Solver:
                 for a in arrays(value):
                     if a.ptr is not None and a.ptr not in seen:
                         seen.add(a.ptr)
-                        total += a.capacity
+                        total += a.size * wp.types.type_size_in_bytes(a.dtype)  # a view's capacity is not its bytes
         return total
 
     def mean_neighbours(self) -> float:

@@ -95,7 +95,7 @@ def build(scalar):
         return p_sum, rho_r, w_sum
 
     @wp.kernel(enable_backward=False, module="unique")
-    def boundary_pressure(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32),
+    def boundary_pressure(p: Params, grid: Grid, nbr: wp.array2d(dtype=wp.int32), count: wp.array(dtype=wp.int32),
                           f: Fields, chunk: int, stride: int):
         """Each boundary particle's density from the pressure extrapolated from its level's fluid."""
         i = wp.tid() * stride + chunk
@@ -104,9 +104,8 @@ def build(scalar):
         p_sum = scalar(0.0)
         w_sum = scalar(0.0)
         rho_r = vec(scalar(0.0))
-        base = i * grid.max_neighbours
         for k in range(count[i]):
-            p_sum, rho_r, w_sum = fluid_term(p, grid, f, f.pos[i], f.hsml[i], nbr[base + k], p_sum, rho_r, w_sum)
+            p_sum, rho_r, w_sum = fluid_term(p, grid, f, f.pos[i], f.hsml[i], nbr[i, k], p_sum, rho_r, w_sum)
         # a wall pushes and never pulls (the module's docstring); fixed walls: a_w = 0
         pressure = wp.max(extrapolated_pressure(p_sum, rho_r, w_sum, p.gravity, vec(scalar(0.0))), scalar(0.0))
         f.rho[i] = eos_density(pressure, p.rho0, p.eos_b, p.gamma, p.rho_min, p.rho_max)

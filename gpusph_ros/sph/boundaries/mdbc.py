@@ -147,7 +147,7 @@ def build(scalar):
             ghost[i] = ghost_offset(p, pos[i], body[i], solid_lo, solid_hi)
 
     @wp.kernel(enable_backward=False, module="unique")
-    def boundary_state(p: Params, grid: Grid, nbr: wp.array(dtype=wp.int32), count: wp.array(dtype=wp.int32),
+    def boundary_state(p: Params, grid: Grid, nbr: wp.array2d(dtype=wp.int32), count: wp.array(dtype=wp.int32),
                        f: Fields, ghost: wp.array(dtype=vec), chunk: int, stride: int):
         """Each boundary particle's density (and velocity, with a slip mode) from its ghost node,
         over its neighbour list (which holds the fluid near the ghost node: neighbours.py)."""
@@ -157,10 +157,9 @@ def build(scalar):
         off = ghost[i]
         xg = f.pos[i] + off
         a, rhs, u = no_sums()
-        base = i * grid.max_neighbours
         h_g = f.hsml[i]
         for k in range(count[i]):
-            j = nbr[base + k]
+            j = nbr[i, k]
             # a slot vacated this step may still be listed (levels.py)
             if state.carries_fluid(f.ptype[j]) and same_level(p, h_g, f.hsml[j]):
                 a, rhs, u = ghost_term(p, grid, f, xg, h_g, j, a, rhs, u)
