@@ -4,7 +4,7 @@
     gpusph-analyze DIR [--charts DIR] [--reference DIR]     (a recording, or a study's results folder)
     gpusph-analyze --repair BAG                             (a killed recording made readable again)
     gpusph-sweep STUDY [--scheduler ADDRESS] [--out DIR]
-    gpusph-plan SCENE [--run-config NAME|FILE ...] [--set key=value ...] [--no-reductions]
+    gpusph-plan SCENE [--run-config NAME|FILE ...] [--set key=value ...] [--no-reductions | --estimate]
     gpusph-stability [--out DIR] [--workers N] [--device DEV] [--kernels ...] ... [--report]
 
 (also ``python -m gpusph_ros.cli run|analyze|sweep|plan|stability ...``). SCENE is a built-in scene name or a YAML
@@ -308,11 +308,15 @@ def plan_main(argv=None):
                         help="steps timed on the device to estimate the step rate (>= 1)")
     parser.add_argument("--no-reductions", action="store_true",
                         help="price only the run as configured, not each scene reduction that applies")
+    parser.add_argument("--estimate", action="store_true",
+                        help="price the run from the scene alone, nothing built or run: particles, memory on "
+                             "its device and whether it is free there, the fewest steps (for runs larger than "
+                             "this machine, or for a device it does not have)")
     args = parser.parse_args(argv)
     import warp as wp
 
     wp.config.log_level = wp.LOG_WARNING
-    from .plan import plan, plan_reductions, table, text
+    from .plan import estimate, estimate_text, plan, plan_reductions, table, text
     from .scenes.schema import load_scene
     from .scenes.settings import resolve
     from .sph import ConfigError
@@ -320,6 +324,9 @@ def plan_main(argv=None):
     try:
         scene = load_scene(args.scene)
         config = resolve(scene, files=args.run_config, sets=args.set)
+        if args.estimate:
+            print(estimate_text(estimate(scene, config)))
+            return 0
         if args.no_reductions:
             print(text(plan(scene, config, args.calibration_steps)))
             return 0

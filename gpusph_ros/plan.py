@@ -7,6 +7,11 @@ flow that speeds up takes shorter steps (the CFL condition on c0 + |u|, the forc
 the estimate is a lower bound (measured: 551 for 562 steps of the 2D collapse to 0.1 s at 5 mm,
 518 for 593 of DamBreak 1 to 0.5 s at 5 cm).
 
+A run larger than this machine, or for a device it does not have, is priced from the scene alone
+(``estimate``, ``gpusph-plan --estimate``): the particles the build would make at most, the memory
+they take on the device (scenes/resources.py, within a few percent of what a solver holds) and
+whether it is free there, and the fewest steps the sound speed allows; nothing is built.
+
 With refinement zones the calibration prices the zones' particles as they stand at rest; fluid that
 flows into a zone later makes fine particles there, so the estimate is a lower bound again. A
 scene with zones is priced without them too; one without them, with a proposed zone at half the
@@ -19,8 +24,8 @@ import numpy as np
 import warp as wp
 import yaml
 
-from .scenes import reduce
-from .scenes.build import build_run
+from .scenes import reduce, resources
+from .scenes.build import build_run, fluid_boxes, scene_config
 from .scenes.schema import parse_scene
 from .sph import ConfigError
 
@@ -52,6 +57,54 @@ def plan(scene, run_config, calibration_steps: int = 30) -> dict:
             "calibration_steps": steps, "calibration_wall_s": wall, "dt": dt, "steps_per_s": rate,
             "mipps": solver.n * rate / 1e6, "end_time": end, "steps": int(round(end / dt)),
             "wall_s": end / dt / rate}
+
+
+def estimate(scene, run_config) -> dict:
+    """What ``plan`` says of a run, from the scene alone: its particles (at most), device memory,
+    whether that memory is free on the device ("fits": True, False, or None where the device is not
+    on this machine; "limit": why not), and the fewest steps to the end time (dt <= cfl h / c0, the
+    sound-speed condition alone) with the particle-steps they cost. Nothing is built or allocated."""
+    cfg = run_config.solver
+    reduced = reduce.apply(scene, run_config.reduction, run_config.output.end_time, cfg.dx, cfg.hdx)
+    if reduced.refine:
+        raise ValueError("refine: an estimate prices a scene without zones (their particles are known only as "
+                         "they are split); plan it without --estimate, or without its zones")
+    cfg = scene_config(reduced, cfg)
+    n = resources.particle_bound(reduced, cfg, fluid_boxes(reduced))
+    free_dev = None
+    if not cfg.device.startswith("cpu"):
+        try:
+            free_dev = resources.device_free_bytes(cfg.device)
+        except (RuntimeError, ValueError):  # Warp: no such device here
+            free_dev = None
+    need, limit = resources.shortfall(n, cfg, free_dev=free_dev if free_dev is not None else 1 << 62)
+    end = run_config.output.end_time
+    dt = cfg.cfl * cfg.h / cfg.sound_speed
+    steps = int(np.ceil(end / dt))
+    fits = (not limit) if (free_dev is not None or cfg.device.startswith("cpu")) else None
+    return {"scene": scene.name, "model": run_config.reduction.label, "dx": cfg.dx, "kernel": cfg.kernel,
+            "precision": cfg.precision, "device": cfg.device, "particles": n, "device_bytes": need,
+            "fits": fits, "limit": limit.lstrip("; "), "end_time": end, "dt": dt, "steps": steps,
+            "particle_steps": n * steps}
+
+
+def estimate_text(e: dict) -> str:
+    if e["fits"] is None:
+        verdict = f"{e['device']} is not on this machine: its free memory is not known here"
+        if e["limit"]:
+            verdict += f"; {e['limit']}"
+    else:
+        verdict = "fits" if e["fits"] else f"does not fit: {e['limit']}"
+    return "\n".join([
+        f"{e['scene']} ({e['model']}): dx = {e['dx']:g} m, {e['kernel']} kernel, {e['precision']} on {e['device']} "
+        "(estimated from the scene: nothing built)",
+        f"particles    at most {e['particles']:,}",
+        f"memory       {e['device_bytes'] / 2 ** 30:.3g} GiB on {e['device']} "
+        f"({e['device_bytes'] / e['particles']:.0f} B a particle): {verdict}",
+        f"steps        at least {e['steps']:,} to t = {e['end_time']:g} s (dt <= cfl h / c0 = {e['dt']:.3g} s)",
+        f"cost         at least {e['particle_steps']:.3g} particle-steps: {e['particle_steps'] / 1e6:.3g} s "
+        f"of wall time at 1 MIPPS (gpusph-plan on the device measures its MIPPS)",
+    ])
 
 
 def plan_reductions(scene, run_config, calibration_steps: int = 30) -> tuple:

@@ -1,13 +1,15 @@
 """gpusph-plan (gpusph_ros.plan): the particle count is the scene's, the memory is what the solver
-holds, and the step estimate from a calibration at rest is a lower bound close to the real count."""
+holds, and the step estimate from a calibration at rest is a lower bound close to the real count.
+An estimate from the scene alone prices 2 x 10^7 particles with their memory."""
 import numpy as np
 import pytest
 
-from gpusph_ros.plan import plan, plan_reductions, table, text, zone_option
+from gpusph_ros.plan import estimate, estimate_text, plan, plan_reductions, table, text, zone_option
+from gpusph_ros.scenes import resources
 from gpusph_ros.scenes.build import build
 from gpusph_ros.scenes.schema import load_scene
 from gpusph_ros.scenes.settings import resolve
-from gpusph_ros.sph import Solver
+from gpusph_ros.sph import ConfigError, Solver
 
 pytestmark = pytest.mark.unit
 
@@ -71,3 +73,47 @@ def test_the_cli_refuses_a_run_the_machine_cannot_hold_with_its_numbers():
                          capture_output=True, text=True, timeout=300)
     assert out.returncode == 1 and "Traceback" not in out.stderr, out.stderr
     assert "gpusph-plan: dx: 0.0005 is not allowed" in out.stderr and "particles" in out.stderr, out.stderr
+
+
+def test_an_estimate_prices_a_run_from_the_scene_alone():
+    """At a spacing this machine builds, the estimate's particles are the build's exactly and its
+    memory within 2% of what the solver holds; the steps are a lower bound."""
+    scene = load_scene("dambreak1_lab")
+    config = resolve(scene, dx=0.03, end_time=0.05)
+    e = estimate(scene, config)
+    model = build(scene, **config.numerics)
+    solver = Solver(model.config, model.particles)
+    assert e["particles"] == len(model.particles) and e["fits"] is True and e["limit"] == ""
+    assert e["device_bytes"] == pytest.approx(solver.device_bytes(), rel=0.02)
+    solver.advance(0.05)
+    assert e["steps"] <= solver.steps
+
+
+def test_20_million_particles_are_priced_with_their_memory_and_refused_for_it(monkeypatch):
+    """A 3D run of 2 x 10^7 particles: priced (particles, memory, steps) without building it; where
+    it does not fit, the refusal names memory, not an index; only past Warp's 32-bit array shapes
+    does one name the index."""
+    scene = load_scene("dambreak1_lab")
+    config = resolve(scene, dx=0.00177, end_time=0.5)
+    monkeypatch.setattr(resources, "host_free_bytes", lambda: 16 * 2 ** 30)
+    e = estimate(scene, config)
+    assert 1.9e7 < e["particles"] < 2.1e7 and e["device_bytes"] > 20 * 2 ** 30 and e["fits"] is False
+    assert "host memory" in e["limit"] and "32-bit" not in e["limit"]
+    words = estimate_text(e)
+    assert "GiB on cpu" in words and "does not fit" in words and "particle-steps" in words
+    gpu = estimate(scene, resolve(scene, dx=0.00177, end_time=0.5, device="cuda:0"))
+    assert gpu["particles"] == e["particles"] and (gpu["fits"] is None or isinstance(gpu["fits"], bool))
+    with pytest.raises(ConfigError, match="host memory") as err:
+        build(scene, **config.numerics)
+    assert "32-bit" not in str(err.value)
+    monkeypatch.setattr(resources, "host_free_bytes", lambda: 1 << 62)
+    cfg = model_config(dx=0.03, max_particles=10 ** 12)
+    with pytest.raises(ConfigError, match="32-bit array shape"):
+        resources.check_count(resources.MAX_INDEXED + 1, cfg, "dx", 1e-4, "dx needs", "a coarser spacing")
+    assert resources.check_count(resources.MAX_INDEXED, cfg, "dx", 1e-4, "dx needs", "a coarser spacing")
+
+
+def model_config(**numerics):
+    from gpusph_ros.sph import SolverConfig
+
+    return SolverConfig(dim=3, **numerics).validate()

@@ -124,17 +124,29 @@ def build(scene: Scene, **numerics) -> Model:
     return build_from(scene, SolverConfig(**numerics))
 
 
-def build_from(scene: Scene, cfg: SolverConfig) -> Model:
-    """The model of ``scene`` under the solver configuration ``cfg``, whose domain the scene sets."""
+def scene_config(scene: Scene, cfg: SolverConfig) -> SolverConfig:
+    """``cfg`` with what the scene decides: its dimension, gravity, depth and periodic axes."""
+    return cfg.replace(dim=scene.dim, gravity=scene.gravity, depth=scene.depth, periodic=scene.periodic).validate()
+
+
+def fluid_boxes(scene: Scene) -> list:
+    """(lo, hi) of every box of fluid the scene fills: its fluid boxes and its wet bed's pieces."""
     dim, up = scene.dim, scene.dim - 1
-    cfg = cfg.replace(dim=dim, gravity=scene.gravity, depth=scene.depth, periodic=scene.periodic).validate()
-    dx = cfg.dx
     boxes = [(b.lo[:dim], b.hi[:dim]) for b in scene.fluid]
     if scene.wet_bed > 0.0:
         footprints = [(b.lo, b.hi) for b in scene.fluid if b.lo[up] <= 0.0]
         footprints += [(o.lo, o.hi) for o in scene.obstacles]
         for lo, hi in floor_rectangles(scene.tank, footprints, dim):
             boxes.append((tuple(lo) + (0.0,), tuple(hi) + (scene.wet_bed,)))
+    return boxes
+
+
+def build_from(scene: Scene, cfg: SolverConfig) -> Model:
+    """The model of ``scene`` under the solver configuration ``cfg``, whose domain the scene sets."""
+    dim, up = scene.dim, scene.dim - 1
+    cfg = scene_config(scene, cfg)
+    dx = cfg.dx
+    boxes = fluid_boxes(scene)
     check_device(cfg.device)
     resources.check(scene, cfg, boxes)  # before anything is allocated
     cfg, parts = box_tank(cfg, scene.tank[:dim], boxes, walls=scene.walls, headroom=scene.headroom)

@@ -23,27 +23,40 @@ HOST_BYTES = 200  # numpy arrays of the particle set and the lattice fills, per 
 _SCALARS, _INTEGER_BYTES = 63, 76
 _LEVEL_BYTES = 20  # with zones: the levels' spawn and free-slot bookkeeping (sph/levels.py)
 USABLE = 0.9  # of the free memory a run may plan to take
+# the most particles whose arrays Warp can shape: the cell sort's keys hold 2 n int32 entries, and a
+# shape is 32-bit (the neighbour lists are n x width, sph/neighbours.lists_array)
+MAX_INDEXED = (2 ** 31 - 1) // 2
 
 
 def particle_bound(scene, cfg: SolverConfig, fluid_boxes) -> int:
-    """At least as many particles as ``scenes.build`` makes of ``scene`` at ``cfg.dx``:
-    ``fluid_boxes`` filled, particle walls (the boundary model's layers of its spacing) and
-    the obstacles' blocks."""
+    """At least as many particles as ``scenes.build`` makes of ``scene`` at ``cfg.dx``, and exactly as
+    many where the walls have a volume (dynamic, mdbc, adami) and the obstacles are blocks of it:
+    ``fluid_boxes`` filled, particle walls (the boundary model's layers of its spacing) and the
+    obstacles' blocks."""
     dim, dx = scene.dim, cfg.dx
     n = sum(math.prod(cells(hi[ax] - lo[ax], dx) for ax in range(dim)) for lo, hi in fluid_boxes)
     n += sum(math.prod(cells(o.hi[ax] - o.lo[ax], dx) for ax in range(dim)) for o in scene.obstacles)
     faces = [face for face, kind in scene.walls.items() if kind == "particles"]
-    if faces:
-        model = boundaries.model(cfg.boundary)
-        spacing = model.spacing(dx, cfg.mk_beta)
-        layers = model.layers(cfg.hdx) + 1  # the shell sits half a spacing out
-        up = dim - 1
-        outer = [cells(scene.tank[ax], spacing) + (0 if scene.periodic[ax] else 2 * layers) for ax in range(up)]
-        outer.append(cells(scene.tank[up], spacing) + layers)
-        for face in faces:  # each face's slab of wall particles, edges counted twice
-            ax = up if face == "floor" else "xy".index(face[0])
-            if not scene.periodic[ax]:
-                n += layers * math.prod(outer[other] for other in range(dim) if other != ax)
+    if not faces:
+        return n
+    model = boundaries.model(cfg.boundary)
+    up = dim - 1
+    axis = {face: up if face == "floor" else "xy".index(face[0]) for face in faces}
+    if model.volume:
+        # exactly boxes.wall_particles: the fluid's lattice continued ``layers`` deep beyond each
+        # particle face, less the tank's inside
+        layers = model.layers(cfg.hdx)
+        inside = [cells(scene.tank[ax], dx) for ax in range(dim)]
+        sides = [sum(1 for face in faces if axis[face] == ax and not scene.periodic[ax]) for ax in range(dim)]
+        return n + math.prod(inside[ax] + layers * sides[ax] for ax in range(dim)) - math.prod(inside)
+    spacing = model.spacing(dx, cfg.mk_beta)
+    layers = model.layers(cfg.hdx) + 1  # the shell sits half a spacing out
+    outer = [cells(scene.tank[ax], spacing) + (0 if scene.periodic[ax] else 2 * layers) for ax in range(up)]
+    outer.append(cells(scene.tank[up], spacing) + layers)
+    for face in faces:  # each face's slab of wall particles, edges counted twice
+        ax = axis[face]
+        if not scene.periodic[ax]:
+            n += layers * math.prod(outer[other] for other in range(dim) if other != ax)
     return n
 
 
@@ -87,18 +100,29 @@ def check(scene, cfg: SolverConfig, fluid_boxes):
 
 def check_count(n: int, cfg: SolverConfig, field: str, value, needs: str, remedy: str, refined: bool = False):
     """ConfigError on ``field`` (its ``value``: "``remedy``: ``needs`` n particles, ...") when ``n``
-    particles would pass ``max_particles`` or the free memory; (n, device bytes) otherwise."""
+    particles would pass ``max_particles``, the free memory or the arrays' 32-bit shapes; (n, device
+    bytes) otherwise."""
+    need, why = shortfall(n, cfg, refined)
+    if why:
+        raise ConfigError(field, value, f"{remedy}: {needs} {n:.3g} particles, {_gib(need)} on {cfg.device}{why}")
+    return n, need
+
+
+def shortfall(n: int, cfg: SolverConfig, refined: bool = False, free_dev: "int | None" = None) -> tuple:
+    """(device bytes of ``n`` particles, "" or why they do not fit: ``max_particles``, the device's free
+    memory (``free_dev``, else asked of the device), the host's, or a 32-bit array shape)."""
     need = device_bytes(n, cfg, refined)
     cpu = cfg.device == "cpu"
     host = n * HOST_BYTES + (need if cpu else 0)
-    free_dev = None if cpu else device_free_bytes(cfg.device)
+    if free_dev is None and not cpu:
+        free_dev = device_free_bytes(cfg.device)
     free_host = host_free_bytes()
-    plan = f"{needs} {n:.3g} particles, {_gib(need)} on {cfg.device}"
     if n > cfg.max_particles:
-        raise ConfigError(field, value, f"{remedy}: {plan}; max_particles is {cfg.max_particles:,}")
-    if free_dev is not None and need > USABLE * free_dev:
-        raise ConfigError(field, value, f"{remedy}: {plan}; {cfg.device} has {_gib(free_dev)} free")
+        return need, f"; max_particles is {cfg.max_particles:,}"
+    if not cpu and need > USABLE * free_dev:
+        return need, f"; {cfg.device} has {_gib(free_dev)} free"
     if host > USABLE * free_host:
-        raise ConfigError(field, value, f"{remedy}: {plan} and {_gib(host)} of host memory in all; "
-                                        f"this machine has {_gib(free_host)} free")
-    return n, need
+        return need, f" and {_gib(host)} of host memory in all; this machine has {_gib(free_host)} free"
+    if n > MAX_INDEXED:
+        return need, f"; the cell sort's arrays (2 n entries) pass Warp's 32-bit array shape at {MAX_INDEXED:,}"
+    return need, ""
