@@ -1,22 +1,27 @@
 """The GPU check (`make gpu-check`): everything this project has measured on a CPU, measured again
-on the first CUDA device Warp sees, in one report file, in under 8 minutes on one GPU (the steps'
-limits add up to 7 min 45 s).
+on the first CUDA device Warp sees, in one report file, in under 10 minutes on one GPU (the steps'
+limits add up to 9 min 40 s).
 
 1. the unit and physics tests with every solver on cuda:0 ($GPUSPH_ROS_DEVICE);
-2. bench/solver.py on cuda:0 at about 10^5, 10^6 and 4x10^6 particles of DamBreak 1, float32 and
-   float64 (MIPPS, neighbours, steps/s);
-3. bench/node.py's cloud cost per output at about 10^6 particles on the GPU;
-4. DamBreak 1 of the experiment (dambreak1_lab, 0.30 m column) at dx = 1 cm to t = 1 s with
-   gpusph-run, and gpusph-analyze's table of it against Yeh & Petroff.
+2. bench/step_counts.py on cuda:0: launches, sorts, fills, copies and host reads of each kind of
+   step, the host's syncs per output, and the step loop eager against replayed from its captured
+   graph (sph/graph.py), at about 10^5 particles;
+3. bench/solver.py on cuda:0 at about 10^5, 10^6, 4x10^6 and 10^7 particles of DamBreak 1, float32
+   and float64 (MIPPS, neighbours, steps/s); a size the GPU's memory cannot hold is refused by the
+   build, named in the output, and the others go on;
+4. bench/node.py's cloud cost per output at about 10^6 particles on the GPU;
+5. DamBreak 1 of the experiment (dambreak1_lab, 0.30 m column) at dx = 1 cm to t = 1 s with
+   gpusph-run, its real-time factor (wall time over simulated time, start-up included), and
+   gpusph-analyze's table of it against Yeh & Petroff.
 
 Each step has a time limit and its output goes into the report whatever happens; a step that
 fails or runs out of time is marked so and the check exits 1. On a machine where Warp finds no
 CUDA device it says so and exits 0, having checked nothing.
 
-    python bench/gpu_check.py [--out runs/gpu-check] [--quick]
+    python bench/gpu_check.py [--out runs/gpu-check] [--cpu]
 
---quick shrinks every step (fewer tests, 10^5 particles only, 0.1 s of DamBreak 1) to check the
-script itself.
+--cpu rehearses the same report on Warp's CPU device (`make gpu-check-cpu`), every step shrunk so
+that it takes under 3 minutes: the script itself checked where no GPU is.
 """
 import argparse
 import datetime
@@ -32,23 +37,29 @@ REPO = Path(__file__).resolve().parents[1]
 BENCH = REPO / "bench"
 
 
-def steps(quick: bool, out: Path) -> list:
-    """(title, command, time limit [s]) of each step."""
+def steps(device: str, out: Path) -> list:
+    """(title, command, time limit [s]) of each step; on "cpu", the rehearsal's shrunk ones."""
     py = sys.executable
-    bag = out / "dambreak1_lab_1cm"
+    cpu = device == "cpu"
+    dx, end = ("0.03", 0.05) if cpu else ("0.01", 1.0)
+    bag = out / f"dambreak1_lab_{float(dx) * 100:g}cm"
+    tests = ["tests/test_graph.py", "tests/test_step_counts.py"] if cpu else ["-m", "unit or physics", "tests"]
     return [
-        ("unit and physics tests on cuda:0",
-         [py, "-m", "pytest", "-q", *(["-x"] if quick else []), "-m", "unit" if quick else "unit or physics",
-          str(REPO / "tests")], 90 if quick else 180),
+        (f"{'the step-loop tests' if cpu else 'unit and physics tests'} on {device}",
+         [py, "-m", "pytest", "-q", *tests], 60 if cpu else 150),
+        ("what a step asks of the device; eager against replayed",
+         [py, str(BENCH / "step_counts.py"), "--device", device, "--dx", "0.03" if cpu else "0.015",
+          "--span", "0.02" if cpu else "0.1"], 60),
         ("solver throughput, DamBreak 1",
-         [py, str(BENCH / "solver.py"), "--device", "cuda:0", "--particles",
-          *(["1e5"] if quick else ["1e5", "1e6", "4e6"]), "--seconds", "2" if quick else "6"], 60 if quick else 120),
+         [py, str(BENCH / "solver.py"), "--device", device, "--particles",
+          *(["1e4", "3e4"] if cpu else ["1e5", "1e6", "4e6", "1e7"]), "--seconds", "2" if cpu else "3"],
+         45 if cpu else 210),
         ("cloud cost per output",
-         [py, str(BENCH / "node.py"), "cloud", "--device", "cuda:0", "--particles", "1e5" if quick else "1e6"], 45),
-        ("DamBreak 1 (0.30 m column) at 1 cm: run",
-         [py, "-m", "gpusph_ros.cli", "run", "dambreak1_lab", "--set", "dx=0.01", "--set", "device=cuda:0",
-          "--set", f"end_time={0.1 if quick else 1.0}", "--out", str(bag)], 60 if quick else 90),
-        ("DamBreak 1 (0.30 m column) at 1 cm: analysis",
+         [py, str(BENCH / "node.py"), "cloud", "--device", device, "--particles", "1e4" if cpu else "1e6"], 40),
+        (f"DamBreak 1 (0.30 m column) at {float(dx) * 100:g} cm: run",
+         [py, "-m", "gpusph_ros.cli", "run", "dambreak1_lab", "--set", f"dx={dx}", "--set", f"device={device}",
+          "--set", f"end_time={end}", "--out", str(bag)], 60 if cpu else 90),
+        (f"DamBreak 1 (0.30 m column) at {float(dx) * 100:g} cm: analysis",
          [py, "-m", "gpusph_ros.cli", "analyze", str(bag)], 30),
     ]
 
@@ -71,29 +82,36 @@ def run_step(title: str, command: list, limit: float, env: dict) -> tuple:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--out", default=str(REPO / "runs" / "gpu-check"), help="report and recording folder")
-    parser.add_argument("--quick", action="store_true", help="shrink every step, to check the script")
+    parser.add_argument("--cpu", action="store_true", help="rehearse the report on the CPU, every step shrunk")
     args = parser.parse_args()
     wp.config.log_level = wp.LOG_WARNING
-    if wp.get_cuda_device_count() == 0:
+    if not args.cpu and wp.get_cuda_device_count() == 0:
         print("gpu-check: Warp finds no CUDA device on this machine; nothing to check "
-              f"(devices: {', '.join(d.alias for d in wp.get_devices())})")
+              f"(devices: {', '.join(d.alias for d in wp.get_devices())}; --cpu rehearses the report on the CPU)")
         return 0
-    gpu = wp.get_device("cuda:0")
+    device = "cpu" if args.cpu else "cuda:0"
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     report = out / "report.md"
-    env = {**os.environ, "GPUSPH_ROS_DEVICE": "cuda:0", "PYTHONUNBUFFERED": "1"}
+    env = {**os.environ, "GPUSPH_ROS_DEVICE": device, "PYTHONUNBUFFERED": "1"}
+    if args.cpu:
+        machine = f"CPU rehearsal (Warp's cpu device, {os.cpu_count()} threads): no GPU figure below"
+    else:
+        gpu = wp.get_device(device)
+        machine = f"GPU: {gpu.name} ({device}, {gpu.total_memory / 2**30:.1f} GiB), host {os.cpu_count()} CPU threads"
     lines = [f"# gpu-check, {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC",
-             "", f"GPU: {gpu.name} (cuda:0, {gpu.total_memory / 2**30:.1f} GiB), Warp {wp.config.version}, "
-             f"Python {sys.version.split()[0]}, host {os.cpu_count()} CPU threads", ""]
+             "", f"{machine}, Warp {wp.config.version}, Python {sys.version.split()[0]}", ""]
     failed = []
     start = time.perf_counter()
-    for title, command, limit in steps(args.quick, out):
+    for title, command, limit in steps(device, out):
         print(f"gpu-check: {title} (limit {limit} s) ...", flush=True)
         ok, wall, text = run_step(title, command, limit, env)
         print(f"gpu-check: {title}: {'ok' if ok else 'FAILED'} in {wall:.0f} s", flush=True)
         if not ok:
             failed.append(title)
+        if ok and title.endswith(": run"):
+            end = float(next(c for c in command if str(c).startswith("end_time=")).split("=")[1])
+            text += f"\n\nreal-time factor: {wall / end:.1f} s of wall time a simulated second (start-up included)"
         lines += [f"## {title}: {'ok' if ok else 'FAILED'} ({wall:.0f} s)", "",
                   "`" + " ".join(str(c).replace(str(REPO) + "/", "") for c in command) + "`", "",
                   "```", text.strip()[-20000:], "```", ""]

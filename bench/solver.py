@@ -18,6 +18,7 @@ import warp as wp
 
 from gpusph_ros.scenes.build import build
 from gpusph_ros.scenes.schema import load_scene
+from gpusph_ros.sph import ConfigError
 
 from series import model_of_about
 
@@ -75,7 +76,11 @@ def main():
     print("-" * len(header))
     for dx, particles in ([(None, n) for n in args.particles] if args.particles else [(dx, None) for dx in args.dx]):
         for precision in args.precision:
-            r = measure(dx, precision, args.device, args.seconds, args.start, particles)
+            try:
+                r = measure(dx, precision, args.device, args.seconds, args.start, particles)
+            except ConfigError as err:  # more than the device holds: say so, go on with the others
+                print(f"{args.device:8s} {precision:9s} {particles or dx:g}: refused: {err}", flush=True)
+                continue
             print(f"{r['device']:8s} {r['precision']:9s} {r['dx']:7.4f} {r['particles']:10d} {r['fluid']:8d} "
                   f"{r['neighbours']:6.1f} {r['steps']:6d} {r['steps_per_s']:8.2f} {r['mipps']:7.3f} "
                   f"{r['interactions_per_s']:15.3e} {r['rebuilds']:8.2f}", flush=True)

@@ -1,4 +1,7 @@
-"""`make gpu-check` on a machine without CUDA says so and exits 0, having checked nothing."""
+"""`make gpu-check` on a machine without CUDA says so and exits 0, having checked nothing; its CPU
+rehearsal (`--cpu`) writes every section of the report, the step counts and graph-against-eager
+tables among them, with every step passing."""
+import re
 import subprocess
 import sys
 
@@ -7,9 +10,8 @@ import warp as wp
 
 from conftest import REPO
 
-pytestmark = pytest.mark.unit
 
-
+@pytest.mark.unit
 def test_gpu_check_without_cuda_says_so_and_exits_0(tmp_path):
     if wp.get_cuda_device_count() > 0:
         pytest.skip("this machine has a CUDA device: make gpu-check runs the real check")
@@ -18,3 +20,17 @@ def test_gpu_check_without_cuda_says_so_and_exits_0(tmp_path):
     assert out.returncode == 0, out.stdout + out.stderr
     assert "finds no CUDA device" in out.stdout
     assert not (tmp_path / "check").exists()  # nothing run, no report
+
+
+@pytest.mark.study
+def test_the_cpu_rehearsal_writes_every_section_of_the_report(tmp_path):
+    out = subprocess.run([sys.executable, str(REPO / "bench/gpu_check.py"), "--cpu", "--out", str(tmp_path)],
+                         capture_output=True, text=True, timeout=360)
+    report = (tmp_path / "report.md").read_text()
+    assert out.returncode == 0, out.stdout + out.stderr + report
+    sections = re.findall(r"^## (.*): (ok|FAILED) \(\d+ s\)$", report, flags=re.M)
+    assert len(sections) == 6 and all(state == "ok" for _, state in sections), sections
+    assert "no GPU figure below" in report and "every step passed" in report
+    assert re.search(r"^\| ordinary \| \d+ \| \d+ \| 0 \|", report, flags=re.M)  # no sort on an ordinary step
+    assert re.search(r"^\| replayed \| 2 \| 0 \| 0 \| 1 \|", report, flags=re.M)  # one replay an output
+    assert "real-time factor" in report and "MIPPS" in report

@@ -1,5 +1,5 @@
 """What the step path asks of the device, counted on the CPU: every kernel launch, sort, scan,
-copy, fill, host read and allocation around a small scene's steps (Warp's functions wrapped).
+copy, fill, host read and allocation around a small scene's steps (sph/device_calls.py).
 
 - An ordinary step (uniform, dynamic walls, lists fresh, no reorder or census due) makes at most
   12 launches and one fill, and sorts nothing.
@@ -9,62 +9,19 @@ copy, fill, host read and allocation around a small scene's steps (Warp's functi
   and the flags once before the loop and once after it (Solver._sync), eager or replayed.
 """
 import collections
-import contextlib
 
 import pytest
-import warp as wp
 
 from gpusph_ros.scenes.build import build
 from gpusph_ros.scenes.schema import parse_scene
 from gpusph_ros.sph import Solver
+from gpusph_ros.sph.device_calls import counting
 from gpusph_ros.sph.state import CENSUS_DUE, REORDER_DUE
 
 pytestmark = pytest.mark.unit
 
 COLUMN = {"name": "tank", "dim": 2, "tank": [0.6, 0.32],
           "fluid": [{"name": "water", "lo": [0.0, 0.0], "hi": [0.12, 0.2]}]}
-
-
-@contextlib.contextmanager
-def counting():
-    """Counts by kind of what the wrapped Warp functions are asked while the block runs."""
-    counts = collections.Counter()
-    undo = []
-    in_sync = []
-
-    def wrap(owner, name, kind):
-        original = getattr(owner, name)
-
-        def counted(*args, **kwargs):
-            if not in_sync:  # what Solver._sync reads is its own count
-                counts[kind] += 1
-            if kind != "sync":
-                return original(*args, **kwargs)
-            in_sync.append(True)
-            try:
-                return original(*args, **kwargs)
-            finally:
-                in_sync.pop()
-
-        setattr(owner, name, counted)
-        undo.append((owner, name, original))
-
-    wrap(wp, "launch", "launch")
-    wrap(wp.utils, "radix_sort_pairs", "sort")
-    wrap(wp.utils, "array_scan", "scan")
-    wrap(wp, "copy", "copy")
-    wrap(wp.array, "fill_", "fill")
-    wrap(wp.array, "zero_", "fill")
-    wrap(wp.array, "numpy", "host_read")
-    wrap(wp, "synchronize", "host_read")
-    wrap(wp, "synchronize_device", "host_read")
-    wrap(type(wp.get_device("cpu").get_allocator()), "allocate", "allocation")
-    wrap(Solver, "_sync", "sync")
-    try:
-        yield counts
-    finally:
-        for owner, name, original in reversed(undo):
-            setattr(owner, name, original)
 
 
 def solver(**settings):
@@ -78,7 +35,7 @@ def flags(s) -> dict:
 
 
 def one_step(s) -> collections.Counter:
-    with counting() as counts:
+    with counting(Solver) as counts:
         s.loop_body(block=2 ** 31 - 1)
     return counts
 
@@ -112,7 +69,7 @@ def test_between_outputs_the_host_reads_nothing_and_nothing_is_allocated(step_gr
     s.advance(0.02)
     for k in range(3, 6):
         steps = s.steps
-        with counting() as counts:
+        with counting(Solver) as counts:
             s.advance(0.01 * k)
         assert s.steps - steps >= 20
         assert counts["sync"] == 2, counts  # before the loop and after it
