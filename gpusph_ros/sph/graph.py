@@ -26,9 +26,10 @@ STEP_GRAPHS = ("auto", "on", "off")
 
 def wanted(setting: str, device, threads: int) -> bool:
     """Whether a loop is replayed from a capture under ``step_graph`` = setting on ``device``, whose
-    heavy passes run on ``threads`` threads."""
+    heavy passes run on ``threads`` threads. A GPU whose driver has no conditional graph nodes (CUDA
+    before 12.4) steps eagerly under ``auto``; ``on`` there raises Warp's error naming the driver."""
     if setting == "auto":
-        return device.is_cuda or threads == 1
+        return (device.is_cuda and wp.is_conditional_graph_supported()) or (device.is_cpu and threads == 1)
     return setting == "on"
 
 
@@ -53,6 +54,9 @@ class LoopGraph:
 
     def _capture(self, block: int):
         s = self._solver
-        with s.launch.serial(), wp.ScopedCapture(s.device, force_module_load=False) as capture:
+        # a CUDA driver may refuse to load a module mid-capture: load every kernel first (a branch
+        # not yet taken, the Shepard filter, has not loaded its own); Warp's API capture on a CPU
+        # loads as it records
+        with s.launch.serial(), wp.ScopedCapture(s.device, force_module_load=s.device.is_cuda) as capture:
             wp.capture_while(s.flag(RUNNING), s.loop_body, block=block)
         return capture.graph
