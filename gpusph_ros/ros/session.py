@@ -3,7 +3,8 @@ messages once for the publishers and the recording, keeps to a real-time factor,
 between two steps for a pause, a step request, a reset, a live parameter change or shut-down.
 
 ROS callbacks run in other threads and only set flags and wait briefly: the solver asks
-``_interrupted`` before every step, so nothing waits longer than one step. All Warp work runs
+``_interrupted`` before every step of its eager loop, so nothing waits longer than one step (every
+64 steps of a replayed loop: a GPU, or one CPU thread; sph/graph.py). All Warp work runs
 in this thread, except a reset's build, which runs while this thread is held idle. Whatever a
 step raises ends the run as a failure the node reports; the thread never dies of it.
 """
