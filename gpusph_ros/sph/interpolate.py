@@ -32,7 +32,7 @@ def build(scalar):
     mat44 = wp.types.matrix((4, 4), scalar)
     K = kernels.build(scalar)
     kernel_w, grad_factor, smoothing, own_scale = K.w, K.grad_factor, K.smoothing, K.own_scale
-    kernels_same_level = K.same_level
+    same_level = K.same_level
     N = neighbours.grid(scalar)
     Grid, separation = N.Grid, N.separation
     S = state.build(scalar)
@@ -87,7 +87,7 @@ def build(scalar):
     @wp.func
     def occupied(p: Params, grid: Grid, f: Fields, x: vec, h_x: scalar, j: int, fluid: scalar, wall: scalar):
         """Particle j's part of the kernel sums sum V W at x of the fluid and of the walls of x's level."""
-        if kernels_same_level(p, h_x, f.hsml[j]):
+        if same_level(p, h_x, f.hsml[j]):
             r = wp.length(separation(grid, x, f.pos[j]))
             h, inv_h, norm, scale = smoothing(p, h_x, f.hsml[j])
             if r < scalar(2.0) * h:

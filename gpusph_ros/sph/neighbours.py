@@ -449,7 +449,6 @@ class NeighbourList:
     def rebuild_sorted(self, pos: wp.array):
         """Build the lists of particles just put in the order of the last sort (a reorder), with
         no second sort."""
-        self.stale.fill_(1)
         self._build(pos, presorted=True)
 
     @property

@@ -316,7 +316,7 @@ def _time_passes(scalar):
             if p.viscosity != ARTIFICIAL and p.nu > scalar(0.0):
                 h_min = wp.float64(p.h_min)  # the finest particles bound the viscous step
                 dt = wp.min(dt, cfl * wp.float64(0.125) * h_min * h_min / wp.float64(p.nu))
-        clock[DT_STABLE] = dt  # the step the stability limits allow, before landing on t_target
+        clock[DT_STABLE] = dt  # the step the stability limits allow, before landing on the TARGET
         remaining = (clock[TARGET] - clock[T]) / wp.float64(p.coarse_stride)
         if remaining <= wp.float64(1.0e-12) * wp.max(wp.float64(1.0), clock[T]):
             dt = wp.float64(0.0)

@@ -30,6 +30,7 @@ from .state import (
     FLUID,
     N_CLOCK,
     N_FLAGS,
+    N_STEPS,
     PASSIVE,
     REORDER_DUE,
     RUNNING,
@@ -189,8 +190,10 @@ class Solver:
         self._pending_mass = wp.zeros(1, dtype=wp.float64, device=dev)
         self._excluded = wp.zeros(health.N_REASONS, dtype=wp.int32, device=dev)
         self._excluded_mass = arr(np.array([0.0, -1.0]), wp.float64)
-        self._clock = wp.zeros(N_CLOCK, dtype=wp.float64, device=dev)  # slots state.T, DT, DT_STABLE, T_FAILED
-        self._steps = arr(np.array([0, -1, 0, 0], dtype=np.int32), wp.int32)  # slots state.STEP ... IN_BLOCK
+        self._clock = wp.zeros(N_CLOCK, dtype=wp.float64, device=dev)  # slots state.T ... TARGET
+        steps = np.zeros(N_STEPS, dtype=np.int32)  # slots state.STEP ... IN_BLOCK
+        steps[FAILED_STEP] = -1
+        self._steps = arr(steps, wp.int32)
         # the step loop's flags (state.RUNNING ...): the first step reorders and takes the census
         flags = np.zeros(N_FLAGS, dtype=np.int32)
         flags[[REORDER_DUE, CENSUS_DUE]] = 1
