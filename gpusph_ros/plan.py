@@ -18,6 +18,7 @@ scene with zones is priced without them too; one without them, with a proposed z
 spacing around each obstacle and probe (``proposed_zones``), printed as the ``refine:`` to paste.
 """
 import dataclasses
+import math
 import time
 
 import numpy as np
@@ -71,17 +72,17 @@ def estimate(scene, run_config) -> dict:
                          "they are split); plan it without --estimate, or without its zones")
     cfg = scene_config(reduced, cfg)
     n = resources.particle_bound(reduced, cfg, fluid_boxes(reduced))
-    free_dev = None
-    if not cfg.device.startswith("cpu"):
+    here, free_dev = True, None
+    if cfg.device != "cpu":
         try:
             free_dev = resources.device_free_bytes(cfg.device)
-        except (RuntimeError, ValueError):  # Warp: no such device here
-            free_dev = None
-    need, limit = resources.shortfall(n, cfg, free_dev=free_dev if free_dev is not None else 1 << 62)
+        except (RuntimeError, ValueError):  # Warp: no such device here; its memory sets no limit we know
+            here, free_dev = False, math.inf
+    need, limit = resources.shortfall(n, cfg, free_dev=free_dev)
     end = run_config.output.end_time
     dt = cfg.cfl * cfg.h / cfg.sound_speed
     steps = int(np.ceil(end / dt))
-    fits = (not limit) if (free_dev is not None or cfg.device.startswith("cpu")) else None
+    fits = not limit if here else None
     return {"scene": scene.name, "model": run_config.reduction.label, "dx": cfg.dx, "kernel": cfg.kernel,
             "precision": cfg.precision, "device": cfg.device, "particles": n, "device_bytes": need,
             "fits": fits, "limit": limit.lstrip("; "), "end_time": end, "dt": dt, "steps": steps,
