@@ -65,7 +65,8 @@ def _force_passes(scalar):
     Sh = shifting.build(scalar)
     concentration_terms, shift_velocity = Sh.concentration_terms, Sh.shift_velocity
     B = boundaries.build(scalar)
-    repulsion, repulsion_potential, wall_density_rate = B.repulsion, B.repulsion_potential, B.wall_density_rate
+    repulsion, backstop, repulsion_potential = B.repulsion, B.backstop, B.repulsion_potential
+    wall_density_rate = B.wall_density_rate
     plane_wall, plane_corners = B.plane_wall, B.plane_corners
     N = neighbours.grid(scalar)
     Grid, separation = N.Grid, N.separation
@@ -98,6 +99,8 @@ def _force_passes(scalar):
         if carries_fluid(t_b) and p.delta_hc0 > scalar(0.0):
             drho += delta_diffusion(p.delta_hc0 * scale, rho_a, rho_b, m_b, r_ab, grad, r2_eta, p.gravity, p.rho0, p.c0)
         acc = pressure_gradient(m_b, f.p_rho2[a], f.p_rho2[b], grad)
+        if t_b == BOUNDARY:
+            acc += backstop(p, r_ab, r, u_ab, scale)
         if p.viscosity == ARTIFICIAL:
             # c0 for the mean sound speed, as GPUSPH: weak compressibility keeps c within ~1% of c0
             alpha = p.alpha

@@ -62,6 +62,7 @@ def build(scalar):
         boundary: int  # boundaries.BOUNDARY_ID: only boundaries/ reads it
         wall_volume: int  # 1: the wall particles carry a density and a fluid volume (boundaries.model)
         wall_continuity: int  # 1: the wall particles' density follows the continuity equation
+        wall_backstop_r0: scalar  # the wall particles' backstop reach at the scene's spacing; 0: none
         mdbc_slip: int  # boundaries.mdbc.SLIP_ID
         lj_d: scalar
         lj_r0: scalar

@@ -58,7 +58,7 @@ def model_params(name: str, g: float, depth: float, dx: float, mk_beta: float, d
     and the constants."""
     m = model(name)
     return {"boundary": BOUNDARY_ID[name], "wall_volume": int(m.volume), "wall_continuity": int(m.continuity),
-            **wall_constants(g, depth, dx, mk_beta, dim)}
+            "wall_backstop_r0": m.backstop * dx, **wall_constants(g, depth, dx, mk_beta, dim)}
 
 
 def params(cfg) -> dict:
@@ -87,6 +87,17 @@ def build(scalar):
         return mk_force(p.mk_k, p.mk_beta, p.mk_d, p.inv_h, m_a, m_b, r_ab, r)
 
     @wp.func
+    def backstop(p: Params, r_ab: vec, r: scalar, u_ab: vec, scale: scalar) -> vec:
+        """What a wall particle at -r_ab, moving at -u_ab relative to a fluid particle of the level
+        of ``scale``, does to it besides the pressure and viscous terms, on walls that have a
+        backstop (model.BoundaryModel.backstop), else nothing: the Lennard-Jones force (thesis Eq.
+        2.24) within the backstop's reach while the two approach, none while they part. It takes
+        energy out and never puts any in (boundaries/adami.py says why)."""
+        if p.wall_backstop_r0 == scalar(0.0) or wp.dot(u_ab, r_ab) >= scalar(0.0):
+            return vec(scalar(0.0))
+        return lj_force(p.lj_d, p.wall_backstop_r0 * scale, r_ab, r)
+
+    @wp.func
     def repulsion_potential(p: Params, m_a: scalar, m_b: scalar, r: scalar) -> scalar:
         """The energy per unit fluid mass that ``repulsion`` stores at distance r."""
         if p.boundary == LENNARD_JONES:
@@ -107,7 +118,7 @@ def build(scalar):
         acc[i] = a
         energy[i] = e
 
-    return SimpleNamespace(repulsion=repulsion, repulsion_potential=repulsion_potential,
+    return SimpleNamespace(repulsion=repulsion, backstop=backstop, repulsion_potential=repulsion_potential,
                            wall_density_rate=wall_density_rate, plane_wall=P.plane_wall,
                            plane_corners=P.plane_corners, evaluate_repulsion=evaluate_repulsion)
 

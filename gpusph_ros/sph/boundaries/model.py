@@ -22,6 +22,10 @@ class BoundaryModel:
     repulsive = False
     # before_forces runs before every force evaluation (the half step's too), not once a step
     each_evaluation = False
+    # the reach, in spacings, of a Lennard-Jones force on a fluid particle approaching a wall
+    # particle (boundaries.backstop), 0 for none: for a wall that holds the fluid out by the fluid's
+    # own pressure alone, where a thin, fast layer's pressure is near zero
+    backstop = 0.0
     # the fluid-wall artificial viscosity, as a multiple of alpha, of a run that leaves
     # visco_bound_factor to the wall (-1): particle walls that push need it to damp the fluid's
     # approach (DualSPHysics' ViscoBoundFactor 1)
