@@ -160,7 +160,7 @@ class Numerics:
     nu: float = setting(1.0e-6, "kinematic viscosity [m^2/s], laminar and SPS")
     sps_cs: float = setting(0.12, "Smagorinsky constant (thesis Eq. 2.20)")
     sps_ci: float = setting(6.6e-3, "isotropic SPS coefficient C_I (thesis Eq. 2.19)")
-    boundary: str = setting("dynamic", "boundary particle model for walls the scene builds of particles: dynamic "
+    boundary: str = setting("adami", "boundary particle model for walls the scene builds of particles: dynamic "
                                        "(Crespo et al. 2007), mdbc (English et al. 2021), adami (extrapolated "
                                        "pressure, Adami et al. 2012), lennard_jones (thesis Eq. 2.24), "
                                        "monaghan_kajtar (Eq. 2.26)", choices=BOUNDARIES,
