@@ -8,7 +8,7 @@
    other (the capture is made at the first output, not timed).
 
     python bench/step_counts.py [--device cpu|cuda:0] [--scene dambreak1_lab] [--dx 0.03]
-                                [--span 0.05] [--precision float32]
+                                [--span 0.05] [--precision float32] [--boundary adami]
 """
 import argparse
 import time
@@ -61,20 +61,23 @@ def main():
     parser.add_argument("--dx", type=float, default=0.03)
     parser.add_argument("--span", type=float, default=0.05, help="simulated seconds timed per mode")
     parser.add_argument("--precision", default="float32")
+    parser.add_argument("--boundary", default=None, help="the wall model (default: the run's default)")
     args = parser.parse_args()
     wp.config.log_level = wp.LOG_WARNING
     scene = load_scene(args.scene)
 
     def solver(step_graph: str, threads: int = 0):
+        walls = {"boundary": args.boundary} if args.boundary else {}
         model = build(scene, dx=args.dx, device=args.device, precision=args.precision, step_graph=step_graph,
-                      cpu_threads=threads)
+                      cpu_threads=threads, **walls)
         s = model.solver()
         s.advance(START)
         return s
 
     # one thread on a CPU: a heavy pass is one launch, as on a GPU
     counted = solver("off", threads=1)
-    print(f"{args.scene} at dx = {args.dx:g} m, {counted.n:,} particles, {args.precision} on {args.device}")
+    print(f"{args.scene} at dx = {args.dx:g} m, {counted.n:,} particles, {counted.config.boundary} walls, "
+          f"{args.precision} on {args.device}")
     print("\n| step | how many of 48 | launches | sorts | fills | copies | host reads | allocations |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- |")
     for kind, (n, most) in sorted(per_step(counted).items()):
