@@ -320,7 +320,7 @@ def test_a_band_around_an_obstacle_and_nested_zones():
     # each level has the pier as a block of its own spacing would be, its walls as many of its spacings deep
     pier, layers = parts.body == 0, boundaries.model(model.config.boundary).layers(model.config.hdx)
     for s in (0.01, 0.005, 0.0025):
-        block, _ = block_particles([0.4, 0.0], [0.44, 0.1], s, 2, layers, lid=True)
+        block, _ = block_particles([0.4, 0.0], [0.44, 0.1], s, 2, layers)
         mine = parts.pos[pier & (parts.spacing == s), :2]
         assert len(mine) == len(block) > 0
         assert np.allclose(np.sort(mine[:, 0] + 1j * mine[:, 1]), np.sort(block[:, 0] + 1j * block[:, 1]))

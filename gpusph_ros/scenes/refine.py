@@ -69,16 +69,16 @@ def distance_outside(pos: np.ndarray, lo: np.ndarray, hi: np.ndarray, dim: int) 
 def wall_depth(pos: np.ndarray, body: np.ndarray, tank, solids, dim: int) -> np.ndarray:
     """How deep each boundary point lies in its solid: below a tank wall's face (``body`` -1; the
     tank [0, tank] open at the top) or in from the nearest face of obstacle ``body`` that the fluid
-    meets (``solids``: (lo, hi, lid) per obstacle; the side faces, and the top where ``lid``)."""
+    meets (``solids``: (lo, hi) per obstacle; its side faces and its top)."""
     up = dim - 1
     lo = np.zeros(dim)
     hi = np.asarray(tank[:dim], dtype=np.float64).copy()
     hi[up] = np.inf
     depth = distance_outside(pos, lo, hi, dim)
-    for k, (s_lo, s_hi, lid) in enumerate(solids):
+    for k, (s_lo, s_hi) in enumerate(solids):
         mine = body == k
         faces = [pos[mine, ax] - s_lo[ax] for ax in range(dim) if ax != up]
-        faces += [s_hi[ax] - pos[mine, ax] for ax in range(dim) if ax != up or lid]
+        faces += [s_hi[ax] - pos[mine, ax] for ax in range(dim)]
         depth[mine] = np.min(faces, axis=0)
     return depth
 
@@ -124,7 +124,7 @@ def split(columns: dict, spacing: np.ndarray, zones, tank, dim: int, dx: float, 
       passive fluid, so that every sum of the zone's active particles is over one spacing;
     - with ``layers`` (the boundary model's wall thickness in spacings), a wall's daughters only
       that many of the zone's spacings deep in their solid (``wall_depth``; ``solids`` the obstacles'
-      (lo, hi, lid)), where the parent level's layers are twice as deep.
+      (lo, hi)), where the parent level's layers are twice as deep.
 
     ``stratify(rho, dz)``, if given, is the density a daughter dz above its parent of density rho
     starts with (the hydrostatic profile the lattice was built on), else the parent's. ``limit(n)``,
