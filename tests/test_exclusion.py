@@ -39,6 +39,12 @@ def break_past_wall(cfg, parts, i):
     parts.pos[i, 1] = cfg.wall_lo[1] - 1.5 * cfg.dx
 
 
+def break_over_the_top(cfg, parts, i):
+    """Put fluid particle i beyond the far wall's face as deep as break_past_wall, but above the
+    wall's top: it went over the wall and left the tank, the wall did not let it through."""
+    parts.pos[i, :2] = [cfg.wall_hi[0] + 1.5 * cfg.dx, cfg.wall_top + 2.0 * cfg.dx]
+
+
 def break_density(cfg, parts, i):
     parts.rho[i] = 1.5 * cfg.rho0
 
@@ -50,7 +56,8 @@ def break_displacement(cfg, parts, i):
     parts.vel[i, 0] = 3.0 * cfg.h / cfg.dt_fixed
 
 
-CASES = {"wall_penetration": (break_past_wall, {}), "density_bounds": (break_density, {}),
+CASES = {"wall_penetration": (break_past_wall, {}), "outside_domain": (break_over_the_top, {}),
+         "density_bounds": (break_density, {}),
          "displacement": (break_displacement, {"dt_fixed": 2.0e-4})}
 
 

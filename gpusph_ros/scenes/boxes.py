@@ -216,7 +216,7 @@ def box_tank(cfg: SolverConfig, tank, fluid_boxes, walls="particles", headroom: 
     wall_lo = [0.0 if ax < dim and not periodic[ax] else -far for ax in range(3)]
     wall_hi = [tank[ax] if ax < up and not periodic[ax] else far for ax in range(3)]
     cfg = cfg.replace(domain_lo=tuple(lo), domain_hi=tuple(hi), planes=planes, wall_lo=tuple(wall_lo),
-                      wall_hi=tuple(wall_hi))
+                      wall_hi=tuple(wall_hi), wall_top=float(tank[up]))
     n_f, n_w = len(fluid), len(wall)
     particles = Particles(
         pos=np.concatenate([fluid, wall]),

@@ -196,7 +196,8 @@ def build_from(scene: Scene, cfg: SolverConfig) -> Model:
             return tuple(c + o if abs(c) < 1.0e30 else c for c, o in zip(point, scene.origin))
 
         cfg = cfg.replace(domain_lo=move(cfg.domain_lo), domain_hi=move(cfg.domain_hi), wall_lo=move(cfg.wall_lo),
-                          wall_hi=move(cfg.wall_hi), solids=[(move(lo), move(hi)) for lo, hi in cfg.solids],
+                          wall_hi=move(cfg.wall_hi), wall_top=cfg.wall_top + scene.origin[scene.dim - 1],
+                          solids=[(move(lo), move(hi)) for lo, hi in cfg.solids],
                           zones=[(move(lo), move(hi), spacing) for lo, hi, spacing in cfg.zones],
                           planes=[Plane(point=move(p.point), normal=p.normal) for p in cfg.planes])
         scene = reduce.translate(scene, scene.origin)

@@ -111,6 +111,8 @@ class Domain:
     # open top) and the solid boxes (lo, hi) fluid must stay out of
     wall_lo: tuple = setting((-1.0e30, -1.0e30, -1.0e30), "the tank's inside, low corner [m]", applies=RESET)
     wall_hi: tuple = setting((1.0e30, 1.0e30, 1.0e30), "the tank's inside, high corner [m]", applies=RESET)
+    wall_top: float = setting(1.0e30, "the top of the tank's walls [m]: a fluid particle beyond a wall and above "
+                                      "it went over the wall", applies=RESET)
     solids: list = setting(None, "solid boxes (lo, hi) fluid must stay out of", applies=RESET, factory=list)
     # refinement zones (lo, hi, spacing), beyond +-1e30 where a zone reaches through a tank face
     zones: list = setting(None, "refinement zones (lo, hi, spacing): where each level is the flow (sph/levels.py)",

@@ -5,10 +5,12 @@ NO_FAILURE); a state with any slot set is never committed.
 
 Faults of one particle (REASONS):
 - non_finite: NaN or infinity in a position, velocity or density;
-- outside_domain: a fluid particle left the domain (the tank, its walls and headroom);
+- outside_domain: a fluid particle left the domain (the tank, its walls and headroom), or the tank
+  over the top of a wall (beyond a wall's face above ``wall_top``: a run-up without a wall friction
+  climbs DamBreak 1's 0.4 m walls, docs/results/wall_pressure.md);
 - density_bounds: a density outside [rho_min, rho_max] (0.8 and 1.25 rho0 by default);
 - wall_penetration: a fluid particle more than ``penetration_ratio`` dx beyond a wall face of the
-  tank, or as deep inside a solid box: the boundary let it through;
+  tank below the walls' top, or as deep inside a solid box: the boundary let it through;
 - displacement: a fluid particle moved more than 0.9 of the kernel support 2h in one step (as
   DualSPHysics' CODE_OUTMOV, MovLimit = 0.9 of its 2h cell): its neighbour list no longer holds
   the particles it met.
@@ -95,7 +97,8 @@ def params(cfg, fluid_mass: float, n_fluid: int) -> dict:
     depth, clumping's distances and share, the energy slack (energy_growth_ratio M g H), the
     displacement limit (0.9 x 2h, squared) and the exclusion limit."""
     return {"rho_min": cfg.rho_min_ratio * cfg.rho0, "rho_max": cfg.rho_max_ratio * cfg.rho0,
-            "wall_lo": cfg.wall_lo, "wall_hi": cfg.wall_hi, "penetration": cfg.penetration_ratio * cfg.dx,
+            "wall_lo": cfg.wall_lo, "wall_hi": cfg.wall_hi, "wall_top": cfg.wall_top,
+            "penetration": cfg.penetration_ratio * cfg.dx,
             "n_solids": len(cfg.solids), "n_zones": len(cfg.zones),
             "clump_r": cfg.clump_ratio * cfg.dx, "clump_wall": CLUMP_WALL_DX * cfg.dx,
             "clump_fraction": cfg.clump_fraction, "n_fluid": max(1, n_fluid),
@@ -154,9 +157,14 @@ def build(scalar):
             return OUTSIDE_DOMAIN
         if bad_density:
             return DENSITY_BOUNDS
-        # beyond a tank wall face, or as deep inside a solid
+        # beyond a tank wall face (above the walls' top it went over them: it left the tank), or as
+        # deep inside a solid
         depth = p.penetration * scale
-        if not in_box(x, p.wall_lo, p.wall_hi, depth, 3) or in_solid(p, x, solid_lo, solid_hi, -depth):
+        if not in_box(x, p.wall_lo, p.wall_hi, depth, 3):
+            if x[p.dim - 1] > p.wall_top:
+                return OUTSIDE_DOMAIN
+            return WALL_PENETRATION
+        if in_solid(p, x, solid_lo, solid_hi, -depth):
             return WALL_PENETRATION
         d = x - x_before
         for ax in range(3):

@@ -92,6 +92,7 @@ def build(scalar):
         n_planes: int
         wall_lo: vec
         wall_hi: vec
+        wall_top: scalar  # the top of the tank's walls: beyond a wall above it a particle went over it
         penetration: scalar  # penetration_ratio dx
         n_solids: int
         n_zones: int  # refinement zones (levels.py): where each level's particles are active
