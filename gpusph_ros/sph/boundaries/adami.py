@@ -23,10 +23,10 @@ layers deep.
 
 Nothing but the fluid's pressure holds the fluid out of such a wall, and where a thin, fast layer
 runs along it (a bore's front over a floor, the flow round a body after an impact) that pressure is
-near zero: particles went through (DamBreak 1 lab at 1.5 cm lost 170, a bore between plane walls
-1.04% of its fluid). So each wall particle also pushes a fluid particle that approaches it within
-0.6 spacings with the Lennard-Jones force (thesis Eq. 2.24, r0 = 0.6 dx; boundaries.backstop), as
-the planes push within half a spacing. The fluid of an ordinary flow stands no nearer than 0.71
+near zero: particles went through (a 3D bore between plane walls lost 1.2% of its fluid, 13
+particles through its particle floor). So each wall particle also pushes a fluid particle that
+approaches it within 0.6 spacings with the Lennard-Jones force (thesis Eq. 2.24, r0 = 0.6 dx;
+boundaries.backstop), as the planes push within half a spacing. The fluid of an ordinary flow stands no nearer than 0.71
 spacings to a wall particle (the closest in `make run`'s job before the impact, where the fluid
 hugs the floor), so the force acts only on a particle already on its way between the wall's
 particles; the pressures read against the converged reference moved by 1-2 points with it
