@@ -1,11 +1,11 @@
 """A scene plus numerics to a solver's starting point: configuration, particles and named bodies.
 
 Fluid boxes are filled exactly (``boxes.fill_box``: top layer half a spacing below the stated
-surface, mass = rho0 x box volume). The wet bed covers the floor outside the fluid boxes'
-and obstacles' footprints, cut into rectangles that are each filled exactly. Obstacles are boxes of
+surface, mass = rho0 x box volume). The wet bed covers the floor outside the fluid boxes' and
+obstacles' footprints, cut into rectangles that are each filled exactly. Obstacles are boxes of
 boundary particles on a lattice that fills each exactly (``block_particles``), a wall's thickness
-deep from its sides and its top, each its own body. Refinement zones (``refine:``) then split the particles in them
-(``refine.py``).
+deep from its sides and its top, each its own body. Refinement zones (``refine:``) then split the
+particles in them (``refine.py``).
 """
 from dataclasses import dataclass
 

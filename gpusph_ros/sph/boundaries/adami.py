@@ -26,14 +26,14 @@ runs along it (a bore's front over a floor, the flow round a body after an impac
 near zero: particles went through (a 3D bore between plane walls lost 1.2% of its fluid, 13
 particles through its particle floor). So each wall particle also pushes a fluid particle that
 approaches it within 0.6 spacings with the Lennard-Jones force (thesis Eq. 2.24, r0 = 0.6 dx;
-boundaries.backstop), as the planes push within half a spacing. The fluid of an ordinary flow stands no nearer than 0.71
-spacings to a wall particle (the closest in `make run`'s job before the impact, where the fluid
-hugs the floor), so the force acts only on a particle already on its way between the wall's
-particles; the pressures read against the converged reference moved by 1-2 points with it
+boundaries.backstop), as the planes push within half a spacing. The fluid of an ordinary flow stands
+no nearer than 0.71 spacings to a wall particle (the closest in `make run`'s job before the impact,
+where the fluid hugs the floor), so the force acts only on a particle already on its way between the
+wall's particles; the pressures read against the converged reference moved by 1-2 points with it
 (docs/results/wall_pressure.md). It acts only while the two approach, so it takes energy out and
-never puts any in: as a conservative force it threw out the daughters that a refinement zone
-spawns half a fine spacing from a coarse particle hugging the floor, and its energy failed
-`make run`'s zoned job at 0.25 s.
+never puts any in: as a conservative force it threw out the daughters that a refinement zone spawns
+half a fine spacing from a coarse particle hugging the floor, and its energy failed `make run`'s
+zoned job at 0.25 s.
 """
 import functools
 from types import SimpleNamespace
