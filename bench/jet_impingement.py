@@ -54,20 +54,26 @@ def main(argv=None):
     start = time.perf_counter()
     centre = np.abs(solver.snapshot()["pos"][:, 1]) < dx
     rows, profile = [], []
-    impulse, span, forces = 0.0, 0.0, []
+    impulse, span, forces, steps = 0.0, 0.0, [], []
     for t in np.arange(args.every, args.window[1] + 1e-9, args.every):
         if t <= args.window[0] + 1e-9:
             solver.advance(float(t))
         else:
             # every step of the window, one sample a step: the wrench's own mean between samples
             # gives the window's force, and these give its scatter from step to step, large where
-            # nothing damps the fluid's motion normal to the wall
+            # nothing damps the fluid's motion normal to the wall; the sensors too, whose reading
+            # at the stagnation point scatters by a quarter of rho U^2 / 2 from step to step at ten
+            # across, so that samples a lattice period apart (dx / U) miss its mean by points
             while not solver.reached(float(t)):
                 before = solver.time
                 solver.step()
                 forces.append(wrench.sample()[0][0])
                 impulse += forces[-1] * (solver.time - before)
                 span += solver.time - before
+                p_step = sensors.sample()
+                steps.append((solver.time, solver.time - before, float(p_step[len(ys) // 2]),
+                              face_load(p_step, pts, normals, areas, np.zeros(3))[0][0],
+                              face_load(np.maximum(p_step, 0.0), pts, normals, areas, np.zeros(3))[0][0]))
         fx = wrench.sample()[0][0]
         p_wall = sensors.sample()
         f_sensors = face_load(p_wall, pts, normals, areas, np.zeros(3))[0][0]
@@ -95,6 +101,13 @@ def main(argv=None):
               f"{p_momentum:>10.1f} {p_jet:>8.1f} {time.perf_counter() - start:>7.1f}", flush=True)
     _, f_sensors, p_sensor, p_face, p_particles, p_momentum, f_positive, p_jet = np.nanmean(rows, axis=0)
     fx = impulse / span
+    # the window's means over every step, each weighted by its step, and the standard error of the
+    # stagnation pressure's from the means of ten blocks (the reading is correlated from step to step)
+    t_step, w, p_steps, load_steps, clipped_steps = np.array(steps).T
+    p_every, load_every, clipped_every = (float((v * w).sum() / w.sum()) for v in (p_steps, load_steps, clipped_steps))
+    edges = np.linspace(args.window[0], args.window[1], 11)
+    blocks = [p_steps[(t_step > a) & (t_step <= b)].mean() for a, b in zip(edges[:-1], edges[1:])]
+    error = np.std(blocks) / np.sqrt(len(blocks))
     print(f"mean over {args.window[0]:g}-{args.window[1]:g} s ({len(rows)} samples; the force over its "
           f"{len(forces)} steps): force on the particles {fx:.1f} N/m ({100 * (fx / force_exact - 1):+.1f}%, "
           f"scatter from step to step {np.std(forces) / fx:.2f} of it), wall-pressure load {f_sensors:.1f} N/m "
@@ -104,6 +117,11 @@ def main(argv=None):
           f"{p_particles:.0f} Pa ({p_particles / p_exact:.1f} x), the sensor with the fluid's deceleration "
           f"{p_momentum:.0f} Pa ({100 * (p_momentum / p_exact - 1):+.1f}%); the jet's core {p_jet:.1f} Pa, the "
           f"sensor above it {p_sensor - p_jet:.0f} Pa ({100 * ((p_sensor - p_jet) / p_exact - 1):+.1f}%)")
+    print(f"over every step of the window ({len(p_steps)}): stagnation pressure {p_every:.0f} Pa "
+          f"({100 * (p_every / p_exact - 1):+.1f}% +- {100 * error / p_exact:.1f}%, scatter from step to step "
+          f"{np.std(p_steps) / p_exact:.2f} of rho U^2 / 2), wall-pressure load {load_every:.1f} N/m "
+          f"({100 * (load_every / force_exact - 1):+.1f}%; {100 * (clipped_every / force_exact - 1):+.1f}% without "
+          f"the pressures below ambient)")
     mean = np.mean(profile, axis=0) / p_exact
     print("wall pressure along the face, mean over the window, in rho U^2 / 2: " + ", ".join(
         f"y/b {y / WIDTH:+.1f}: {v:.2f}" for y, v in zip(ys[::len(ys) // 16], mean[::len(ys) // 16])))
