@@ -7,6 +7,7 @@ boundary particles on a lattice that fills each exactly (``block_particles``), a
 deep from its sides and its top, each its own body. Refinement zones (``refine:``) then split the
 particles in them (``refine.py``).
 """
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -143,6 +144,26 @@ def fluid_boxes(scene: Scene) -> list:
     return boxes
 
 
+def moving_bodies(scene: Scene, cfg: SolverConfig) -> list:
+    """Each obstacle's prescribed motion by body id ([] when none moves), its particles' speed held
+    under a tenth of the sound speed (weak compressibility's bound on the flow it drives)."""
+    if all(o.motion is None for o in scene.obstacles):
+        return []
+    if scene.refine:
+        raise ConfigError("refine", [z.name for z in scene.refine], "no refinement zones in a scene with a moving "
+                                                                   "obstacle (not carried through yet)")
+    for k, o in enumerate(scene.obstacles):
+        if o.motion is not None:
+            corners = np.array(np.meshgrid(*zip(o.lo, o.hi))).reshape(3, -1).T
+            reach = float(np.linalg.norm(corners - np.asarray(o.motion.centre), axis=1).max())
+            speed = o.motion.peak_speed(reach)
+            if speed > cfg.sound_speed / 10.0:
+                raise ConfigError(f"obstacles[{k}].motion", o.name, f"a motion whose particles move at most c0 / 10 = "
+                                                                    f"{cfg.sound_speed / 10.0:.3g} m/s; it reaches "
+                                                                    f"{speed:.3g} m/s")
+    return [o.motion for o in scene.obstacles]
+
+
 def build_from(scene: Scene, cfg: SolverConfig) -> Model:
     """The model of ``scene`` under the solver configuration ``cfg``, whose domain the scene sets."""
     dim = scene.dim
@@ -166,7 +187,8 @@ def build_from(scene: Scene, cfg: SolverConfig) -> Model:
     layers = boundaries.model(cfg.boundary).layers(cfg.hdx)
     bodies, solids = {}, []
     for k, o in enumerate(scene.obstacles):
-        solids.append((o.lo, o.hi))
+        if o.motion is None:  # a moving body's box is not where its particles are
+            solids.append((o.lo, o.hi))
         block, volume = block_particles(o.lo, o.hi, dx, dim, layers)
         pos.append(block)
         rho.append(np.full(len(block), cfg.rho0))  # mostly dry at the start; dynamic ones adjust
@@ -174,7 +196,8 @@ def build_from(scene: Scene, cfg: SolverConfig) -> Model:
         ptype.append(np.full(len(block), BOUNDARY))
         body.append(np.full(len(block), k, dtype=np.int32))
         bodies[o.name] = k
-    cfg = cfg.replace(solids=[(tuple(o.lo), tuple(o.hi)) for o in scene.obstacles])
+    motions = moving_bodies(scene, cfg)
+    cfg = cfg.replace(solids=[(tuple(lo), tuple(hi)) for lo, hi in solids], motions=motions).validate()
     columns = {"pos": np.concatenate(pos), "rho": np.concatenate(rho), "mass": np.concatenate(mass),
                "ptype": np.concatenate(ptype), "body": np.concatenate(body)}
     spacing = None
@@ -198,6 +221,7 @@ def build_from(scene: Scene, cfg: SolverConfig) -> Model:
         cfg = cfg.replace(domain_lo=move(cfg.domain_lo), domain_hi=move(cfg.domain_hi), wall_lo=move(cfg.wall_lo),
                           wall_hi=move(cfg.wall_hi), wall_top=cfg.wall_top + scene.origin[scene.dim - 1],
                           solids=[(move(lo), move(hi)) for lo, hi in cfg.solids],
+                          motions=[m and dataclasses.replace(m, centre=move(m.centre)) for m in cfg.motions],
                           zones=[(move(lo), move(hi), spacing) for lo, hi, spacing in cfg.zones],
                           planes=[Plane(point=move(p.point), normal=p.normal) for p in cfg.planes])
         scene = reduce.translate(scene, scene.origin)

@@ -224,6 +224,9 @@ def apply(scene: Scene, reduction: Reduction, end_time: float, dx: float, hdx: f
     """``scene`` reduced as ``reduction`` says; ConfigError naming the setting when a reduction
     does not fit the scene."""
     reduction.validate()
+    if any(o.motion is not None for o in scene.obstacles) and reduction.label != Reduction().label:
+        raise ConfigError("model", reduction.label, "full, without crop or wall_planes: a scene with a moving obstacle "
+                                                    "is not reduced yet")
     if scene.refine and reduction.label not in (Reduction().label, Reduction(model="2d").label):
         raise ConfigError("model", reduction.label, "full or 2d, without crop or wall_planes: the scene's refinement "
                                                     "zones (refine:) are not carried through the others yet")

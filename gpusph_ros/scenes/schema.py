@@ -22,6 +22,7 @@ from pathlib import Path
 import yaml
 
 from ..share import config_dir
+from ..sph import bodies
 from ..sph.config import ConfigError, unknown_key
 from . import yaml_input
 from .boxes import WALL_KINDS, wall_faces
@@ -61,6 +62,7 @@ class Obstacle(Box):
 
     block_offsets: tuple = (0.0, 0.06)
     displaces_fluid: bool = False
+    motion: object = None  # sph.bodies.Motion, or None: fixed
 
     def centre(self, dim: int) -> tuple:
         """The body's reference point, the centre of its box (z = 0 in 2D): its torque is about it."""
@@ -302,7 +304,7 @@ def _obstacles(items, tank, dim) -> list:
                                                                   "at every output)")
     for k, item in enumerate(items):
         where = f"obstacles[{k}]"
-        item, name, lo, hi = _box(where, item, tank, dim, extra_keys=("block_offsets", "displaces_fluid"))
+        item, name, lo, hi = _box(where, item, tank, dim, extra_keys=("block_offsets", "displaces_fluid", "motion"))
         offsets = item.get("block_offsets", [0.0, 0.06])
         if not isinstance(offsets, list):
             raise ConfigError(f"{where}.block_offsets", offsets, "a list of distances >= 0 [m]")
@@ -312,9 +314,56 @@ def _obstacles(items, tank, dim) -> list:
         displaces = item.get("displaces_fluid", False)
         if not isinstance(displaces, bool):
             raise ConfigError(f"{where}.displaces_fluid", displaces, "true or false")
-        obstacles.append(Obstacle(name, lo, hi, offsets, displaces))
+        obstacle = Obstacle(name, lo, hi, offsets, displaces)
+        if item.get("motion") is not None:
+            obstacle.motion = _motion(f"{where}.motion", item["motion"], obstacle, tank, dim)
+        obstacles.append(obstacle)
     _unique("obstacles", [o.name for o in obstacles])
     return obstacles
+
+
+MOTION_KEYS = {"sinusoid": ("type", "amplitude", "period", "phase_deg", "angle_deg", "axis", "centre"),
+               "move": ("type", "displacement", "duration", "start")}
+
+
+def _motion(where, value, obstacle, tank, dim) -> bodies.Motion:
+    """An obstacle's prescribed motion (sph/bodies.py): a sinusoid of its displacement and of its
+    angle about an axis through ``centre`` (default the box's centre), or a move by
+    ``displacement`` over ``duration``; the box must stay in the tank over its translation."""
+    kind = value.get("type") if isinstance(value, dict) else None
+    if kind not in bodies.LAWS:
+        raise ConfigError(f"{where}.type", kind, "one of " + ", ".join(bodies.LAWS))
+    keys = MOTION_KEYS[kind]
+    item = _mapping(where, value, keys, required=("type", "period") if kind == "sinusoid" else keys[:3])
+    if kind == "move":
+        shift = _pad3(_vector(f"{where}.displacement", item["displacement"], dim))
+        motion = bodies.Motion(law="move", centre=obstacle.centre(dim), amplitude=shift,
+                               duration=_number(f"{where}.duration", item["duration"], lo=0.0, lo_open=True),
+                               start=_number(f"{where}.start", item.get("start", 0.0), lo=0.0))
+        reach = [(min(0.0, c), max(0.0, c)) for c in shift]
+    else:
+        amplitude = _pad3(_vector(f"{where}.amplitude", item.get("amplitude", [0.0] * dim), dim))
+        phase = math.radians(_number(f"{where}.phase_deg", item.get("phase_deg", 0.0), lo=-360.0, hi=360.0))
+        angle = math.radians(_number(f"{where}.angle_deg", item.get("angle_deg", 0.0), lo=-90.0, hi=90.0))
+        if dim == 2 and "axis" in item:
+            raise ConfigError(f"{where}.axis", item["axis"], "no axis in 2D: a 2D body turns in its plane (about z)")
+        axis = _vector(f"{where}.axis", item.get("axis", [0.0, 0.0, 1.0]), 3) if dim == 3 else (0.0, 0.0, 1.0)
+        if math.hypot(*axis) == 0.0:
+            raise ConfigError(f"{where}.axis", list(axis), "a non-zero vector")
+        centre = _pad3(_vector(f"{where}.centre", item["centre"], dim)) if "centre" in item else obstacle.centre(dim)
+        if not any(amplitude) and angle == 0.0:
+            raise ConfigError(where, value, "a sinusoid with a non-zero amplitude or angle_deg")
+        motion = bodies.Motion(law="sinusoid", centre=centre, amplitude=amplitude,
+                               period=_number(f"{where}.period", item["period"], lo=0.0, lo_open=True),
+                               phase=phase, angle=angle, axis=axis)
+        reach = [(a * (-1.0 - math.sin(phase)), a * (1.0 - math.sin(phase))) for a in amplitude]
+        reach = [(min(lo, hi), max(lo, hi)) for lo, hi in reach]
+    for ax in range(dim - 1):  # the vertical axis: the tank is open at the top
+        low, high = obstacle.lo[ax] + reach[ax][0], obstacle.hi[ax] + reach[ax][1]
+        if low < 0.0 or high > tank[ax]:
+            raise ConfigError(where, value, f"a motion that keeps the box in the tank: along axis {ax} it reaches "
+                                            f"[{low:.4g}, {high:.4g}] m of [0, {tank[ax]:g}]")
+    return motion
 
 
 def _zones(items, tank, dim, obstacles) -> list:

@@ -114,6 +114,8 @@ class Domain:
     wall_top: float = setting(1.0e30, "the top of the tank's walls [m]: a fluid particle beyond a wall and above "
                                       "it went over the wall", applies=RESET)
     solids: list = setting(None, "solid boxes (lo, hi) fluid must stay out of", applies=RESET, factory=list)
+    motions: list = setting(None, "each body's prescribed motion by body id (bodies.Motion; None: fixed)",
+                            applies=RESET, factory=list)
     # refinement zones (lo, hi, spacing), beyond +-1e30 where a zone reaches through a tank face
     zones: list = setting(None, "refinement zones (lo, hi, spacing): where each level is the flow (sph/levels.py)",
                           applies=RESET, factory=list)
@@ -337,6 +339,13 @@ class SolverConfig(Numerics, HealthLimits, Domain):
                 raise ConfigError("periodic", self.periodic,
                                   f"periodic axes at least {shortest / (2 * self.h):.2f} kernel supports "
                                   f"({shortest:.4g} m) long; axis {axis} is shorter")
+        if any(m is not None for m in self.motions):
+            # mDBC's ghost nodes are offsets fixed at the start, and a zone's levels step at their own rates
+            if self.boundary == "mdbc":
+                raise ConfigError("boundary", self.boundary, "dynamic or adami: a scene with a moving body (mdbc's "
+                                                             "ghost nodes do not follow it yet)")
+            if self.zones:
+                raise ConfigError("zones", len(self.zones), "none: refinement zones do not take a moving body yet")
         for k, plane in enumerate(self.planes):
             normal = getattr(plane, "normal", None)
             try:

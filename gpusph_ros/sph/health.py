@@ -69,9 +69,10 @@ CLUMP_WALL_DX = 2.0  # [dx] clumping is not counted this close to a wall or soli
 CLUMP_MIN = 16  # clumped particles below which no fraction is a failure: in a run of 18 particles one pair is 11%
 NO_ENERGY = 1.0e300  # the energy check's "no reference yet"
 # slots of the census sums (census, census_check): the candidate's energy, the energy at the start,
-# the largest clumped fraction, the largest energy rise, the lowest and highest healthy fluid density
-ENERGY, ENERGY_START, PEAK_CLUMPED, PEAK_ENERGY_GROWTH, RHO_LOW, RHO_HIGH = range(6)
-CENSUS_START = (0.0, NO_ENERGY, 0.0, 0.0, 1.0e300, -1.0e300)  # before any census
+# the largest clumped fraction, the largest energy rise, the lowest and highest healthy fluid density,
+# and the work the moving bodies have done on the fluid (bodies.work_on_fluid), which its energy may gain
+ENERGY, ENERGY_START, PEAK_CLUMPED, PEAK_ENERGY_GROWTH, RHO_LOW, RHO_HIGH, WORK = range(7)
+CENSUS_START = (0.0, NO_ENERGY, 0.0, 0.0, 1.0e300, -1.0e300, 0.0)  # before any census
 # slots of the clumping count: clumped fluid particles away from walls, the first of them
 CLUMPED, FIRST_CLUMPED = range(2)
 # slots of the excluded mass: the fluid mass excluded, the time of the first exclusion (-1 before)
@@ -255,8 +256,9 @@ def build(scalar):
     def census_check(p: Params, total: wp.array(dtype=wp.float64), count: wp.array(dtype=wp.int32),
                      fail: wp.array(dtype=wp.int32)):
         """Flags energy_growth when the candidate's energy exceeds the start's (NO_ENERGY before the
-        first check) by the slack, clumping when too many particles have clumped; keeps the peaks."""
-        e = total[ENERGY]
+        first check) and the work the moving bodies did on the fluid by the slack, clumping when too
+        many particles have clumped; keeps the peaks."""
+        e = total[ENERGY] - total[WORK]
         if total[ENERGY_START] == wp.float64(1.0e300):  # NO_ENERGY as a literal: a Python float would be float32
             total[ENERGY_START] = e
         total[PEAK_ENERGY_GROWTH] = wp.max(total[PEAK_ENERGY_GROWTH], e - total[ENERGY_START])

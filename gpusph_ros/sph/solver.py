@@ -14,7 +14,7 @@ import math
 import numpy as np
 import warp as wp
 
-from . import boundaries, density, eos, graph, health, kernels, levels, passes, shifting, viscosity, xsph
+from . import bodies, boundaries, density, eos, graph, health, kernels, levels, passes, shifting, viscosity, xsph
 from .config import RESET_FIELDS, SolverConfig, check_device
 from .health import HealthError
 from .kernels import COARSER_LEVELS, EVERY_LEVEL, FINEST_LEVEL
@@ -155,7 +155,14 @@ class Solver:
         self._drho = wp.zeros(n, dtype=s, device=dev)
         shared = dict(pressure=self.pressure, p_rho2=wp.zeros(n, dtype=s, device=dev), mass=self.mass,
                       hsml=self.hsml, ptype=self.ptype, body=self.body, tau_diag=wp.zeros(n, dtype=v, device=dev),
-                      tau_off=wp.zeros(n, dtype=v, device=dev))
+                      tau_off=wp.zeros(n, dtype=v, device=dev), wall_acc=wp.zeros(n, dtype=v, device=dev))
+        self.wall_acc = shared["wall_acc"]
+        # prescribed motion (bodies.py): each body's law, and where its particles stood at t = 0 in
+        # the caller's order (``ids`` finds them after a reorder); a scene without motion has none
+        self._moving = any(m is not None for m in cfg.motions)
+        if self._moving:
+            self._laws = bodies.build(s).laws(cfg.motions, dev)
+            self._rest = arr(np.asarray(particles.pos, dtype=np.float64), wp.vec3d)
         self.fields = self._make_fields(self.pos, self.vel, self.rho, shared)
         self._fields_h = self._make_fields(self._pos_h, self._vel_h, self._rho_h, shared)
         self._fields_c = self._make_fields(self._pos_c, self._vel_c, self._rho_c, shared)
@@ -250,6 +257,7 @@ class Solver:
         how many steps since the loop started the device may take before it stops for the host."""
         n, dev, p, k = self.n, self.device, self.params, self._passes
         wp.capture_if(self.flag(REORDER_DUE), on_true=self._reorder)
+        self._move_walls(0.0, self.pos, self.vel)  # the walls' acceleration in this slot order too
         self.neighbours.rebuild(self.pos)
         self._maxima.zero_()
         self.boundary.before_forces(self, self.fields)
@@ -258,9 +266,15 @@ class Solver:
         state, half, candidate = (self.pos, self.vel, self.rho), self._half, self._candidate
         if p.coarse_stride == 1:
             self._integrate(0.5, state, self.vel, half)
+            self._move_walls(0.5, *half[:2])
             self._walls_again(self._fields_h)
             self._forces(self._fields_h)
             self._integrate(1.0, state, self._vel_h, candidate)
+            self._move_walls(1.0, *candidate[:2])
+            if self._moving:
+                wp.launch(bodies.build(self.scalar).work_on_fluid, dim=n,
+                          inputs=[self._laws, self._clock, self.ptype, self.body, self.mass, self.acc, self._vel_h,
+                                  self._energy_sum, health.WORK], device=dev)
         else:
             self._two_rates(state, half, candidate)
         wp.launch(k.check_particles, dim=n,
@@ -281,6 +295,14 @@ class Solver:
                                          _CENSUS_EVERY, self.config.shepard_every, block], device=dev)
         self.neighbours.moved(self.pos, self.vel, self._clock)
         wp.capture_if(self.flag(SHEPARD_DUE), on_true=self.shepard_filter, rebuild=False)
+
+    def _move_walls(self, factor: float, pos, vel):
+        """The moving bodies' particles at t + factor dt on their prescribed paths (bodies.py), with
+        their velocity and acceleration; nothing in a scene without motion."""
+        if self._moving:
+            wp.launch(bodies.build(self.scalar).move_walls, dim=self.n,
+                      inputs=[self._laws, self._clock, factor, self.ptype, self.body, self.ids, self._rest, pos, vel,
+                              self.wall_acc], device=self.device)
 
     def _census(self):
         """The fluid's energy and clumping, checked against the run's limits (health.census)."""

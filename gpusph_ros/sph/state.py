@@ -121,5 +121,6 @@ def build(scalar):
         body: wp.array(dtype=wp.int32)
         tau_diag: wp.array(dtype=vec)  # SPS stress / rho: xx, yy, zz
         tau_off: wp.array(dtype=vec)  # xy, xz, yz
+        wall_acc: wp.array(dtype=vec)  # a moving body's particles' acceleration (bodies.py); zero elsewhere
 
     return SimpleNamespace(Params=Params, Fields=Fields)

@@ -7,7 +7,7 @@ fluid f around it, a Shepard mean carried to w with the force balance across the
 
     p_w = [sum_f p_f W_wf + (g - a_w) . sum_f rho_f r_wf W_wf] / sum_f W_wf,    r_wf = x_w - x_f
 
-(Eq. 27; a_w the wall's acceleration, zero for the fixed walls of a scene today), over the fluid of
+(Eq. 27; a_w the wall's acceleration: a moving body's, sph/bodies.py, else zero), over the fluid of
 its own refinement level, p_f from the fluid's density by the Tait law; and the density whose Tait
 pressure that is (Eq. 28's role, here the inverse of thesis Eq. 2.12), within the fluid's density
 bounds. A wall particle with no fluid in its support keeps rho0 (p = 0). A negative extrapolated
@@ -17,7 +17,7 @@ tension, and without a wall friction their particles rattle against it; on the i
 times its mean with the clamp, and the sheets no longer wrapped round the wall's ends.
 The fluid then sees the wall through the ordinary pressure and viscous terms, as under dynamic
 boundaries, with no density diffusion across the wall (passes.pair diffuses between fluid only).
-The wall's velocity is its own (zero): the viscous term is the fluid-wall artificial viscosity of
+The wall's velocity is its own (a moving body's, else zero): the viscous term is the fluid-wall artificial viscosity of
 the other particle walls, not Adami's extrapolated no-slip velocity. A wall is a kernel support of
 layers deep.
 
@@ -121,8 +121,8 @@ def build(scalar):
         rho_r = vec(scalar(0.0))
         for k in range(count[i]):
             p_sum, rho_r, w_sum = fluid_term(p, grid, f, f.pos[i], f.hsml[i], nbr[i, k], p_sum, rho_r, w_sum)
-        # a wall pushes and never pulls (the module's docstring); fixed walls: a_w = 0
-        pressure = wp.max(extrapolated_pressure(p_sum, rho_r, w_sum, p.gravity, vec(scalar(0.0))), scalar(0.0))
+        # a wall pushes and never pulls (the module's docstring); a_w: a moving body's (bodies.py)
+        pressure = wp.max(extrapolated_pressure(p_sum, rho_r, w_sum, p.gravity, f.wall_acc[i]), scalar(0.0))
         f.rho[i] = eos_density(pressure, p.rho0, p.eos_b, p.gamma, p.rho_min, p.rho_max)
 
     @wp.kernel(enable_backward=False, module="unique")
