@@ -14,6 +14,13 @@ pytestmark = pytest.mark.physics
 # particles change level and new ones are made in reserved slots (sph/levels.py)
 ZONED = {"name": "zoned", "dim": 2, "tank": [0.6, 0.32], "fluid": [{"name": "water", "lo": [0, 0], "hi": [0.12, 0.2]}],
          "refine": [{"name": "downstream", "lo": [0.2, 0.0], "hi": [0.6, 0.32], "ratio": 0.5}]}
+# a box floating in a tank, let go 5 mm above its draft, beside a paddle that moves (sph/bodies.py)
+BODIES = {"name": "bodies", "dim": 2, "tank": [0.6, 0.4],
+          "fluid": [{"name": "water", "lo": [0.1, 0], "hi": [0.6, 0.2]}],
+          "obstacles": [{"name": "box", "lo": [0.3, 0.18], "hi": [0.4, 0.23], "displaces_fluid": True,
+                         "floating": {"density": 500}},
+                        {"name": "paddle", "lo": [0.04, 0.0], "hi": [0.1, 0.4],
+                         "motion": {"type": "sinusoid", "amplitude": [0.01, 0.0], "period": 0.5, "phase_deg": -90}}]}
 
 
 @pytest.mark.parametrize("scene, dx, settings", [
@@ -23,6 +30,7 @@ ZONED = {"name": "zoned", "dim": 2, "tank": [0.6, 0.32], "fluid": [{"name": "wat
     ("dambreak1_thesis", 0.06, {"boundary": "adami"}),
     ("dambreak1_thesis", 0.06, {"boundary": "monaghan_kajtar", "shifting": True}),
     (ZONED, 0.02, {}),
+    (BODIES, 0.02, {}),
 ])
 def test_a_restored_solver_steps_as_the_one_it_was_taken_from(scene, dx, settings):
     model = build(load_scene(scene) if isinstance(scene, str) else parse_scene(scene), dx=dx, **settings)
@@ -44,6 +52,8 @@ def test_a_restored_solver_steps_as_the_one_it_was_taken_from(scene, dx, setting
     assert (second.steps, second.time) == (first.steps, first.time)
     a, b = first.snapshot(), second.snapshot()
     assert all(np.array_equal(a[k], b[k]) for k in a)
+    for x, y in zip(first.body_states(), second.body_states()):
+        assert x is None and y is None or all(np.array_equal(x[k], y[k]) for k in x)
 
 
 def test_a_state_of_another_solver_is_refused_with_what_differs():

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..sph import boundaries
+from ..sph import bodies, boundaries
 from ..sph.config import ConfigError, Plane, SolverConfig, check_device
 from ..sph.eos import hydrostatic_density, hydrostatic_depth
 from ..sph.particles import Particles
@@ -46,13 +46,15 @@ def _inside(pts, lo, hi, dim):
     return np.all((pts[:, :dim] >= np.asarray(lo[:dim])) & (pts[:, :dim] <= np.asarray(hi[:dim])), axis=1)
 
 
-def block_particles(lo, hi, dx: float, dim: int, layers: int):
-    """Boundary particles of an obstacle box [lo, hi] standing on the floor, and the volume each
-    stands for: fill_box's lattice (the outer layer half a spacing, at most dx/2, in from each face,
-    where the fluid meets a tank wall, whatever the block's size), ``layers`` deep from each side
-    face and from the top: a block as tall as the tank has a lid too, as a run-up without a wall
-    friction climbs DamBreak 1's 0.4 m obstruction and fell into the open block
-    (docs/results/wall_pressure.md)."""
+def block_particles(lo, hi, dx: float, dim: int, layers: int, bottom: bool = False):
+    """Boundary particles of an obstacle box [lo, hi], and the volume each stands for: fill_box's
+    lattice (the outer layer half a spacing, at most dx/2, in from each face, where the fluid meets a
+    tank wall, whatever the block's size), ``layers`` deep from each side face and from the top: a
+    block as tall as the tank has a lid too, as a run-up without a wall friction climbs DamBreak 1's
+    0.4 m obstruction and fell into the open block (docs/results/wall_pressure.md). A block standing
+    on the floor has no bottom, the tank's floor is there; one that may leave it (``bottom``: a
+    floating or moving body) has one: a floating box without it filled from below, and a held box
+    at its draft felt a quarter of its buoyancy at dx = 1 cm."""
     pts, volume = fill_box(lo, hi, dx, dim)
     up = dim - 1
     shell = np.zeros(len(pts), dtype=bool)
@@ -62,7 +64,7 @@ def block_particles(lo, hi, dx: float, dim: int, layers: int):
         if ax != up:
             shell |= (k < layers) | (k >= n - layers)
         else:
-            shell |= k >= n - layers
+            shell |= (k >= n - layers) | ((k < layers) & bottom)
     return pts[shell], volume
 
 
@@ -153,7 +155,7 @@ def moving_bodies(scene: Scene, cfg: SolverConfig) -> list:
         raise ConfigError("refine", [z.name for z in scene.refine], "no refinement zones in a scene with a moving "
                                                                    "obstacle (not carried through yet)")
     for k, o in enumerate(scene.obstacles):
-        if o.motion is not None:
+        if isinstance(o.motion, bodies.Motion):
             corners = np.array(np.meshgrid(*zip(o.lo, o.hi))).reshape(3, -1).T
             reach = float(np.linalg.norm(corners - np.asarray(o.motion.centre), axis=1).max())
             speed = o.motion.peak_speed(reach)
@@ -189,7 +191,7 @@ def build_from(scene: Scene, cfg: SolverConfig) -> Model:
     for k, o in enumerate(scene.obstacles):
         if o.motion is None:  # a moving body's box is not where its particles are
             solids.append((o.lo, o.hi))
-        block, volume = block_particles(o.lo, o.hi, dx, dim, layers)
+        block, volume = block_particles(o.lo, o.hi, dx, dim, layers, bottom=o.motion is not None)
         pos.append(block)
         rho.append(np.full(len(block), cfg.rho0))  # mostly dry at the start; dynamic ones adjust
         mass.append(np.full(len(block), cfg.rho0 * volume))

@@ -19,6 +19,7 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
 import yaml
 
 from ..share import config_dir
@@ -304,19 +305,25 @@ def _obstacles(items, tank, dim) -> list:
                                                                   "at every output)")
     for k, item in enumerate(items):
         where = f"obstacles[{k}]"
-        item, name, lo, hi = _box(where, item, tank, dim, extra_keys=("block_offsets", "displaces_fluid", "motion"))
+        item, name, lo, hi = _box(where, item, tank, dim,
+                                  extra_keys=("block_offsets", "displaces_fluid", "motion", "floating"))
         offsets = item.get("block_offsets", [0.0, 0.06])
         if not isinstance(offsets, list):
             raise ConfigError(f"{where}.block_offsets", offsets, "a list of distances >= 0 [m]")
         offsets = tuple(_number(f"{where}.block_offsets[{j}]", o, lo=0.0) for j, o in enumerate(offsets))
-        if lo[up] > 0.0:
-            raise ConfigError(f"{where}.lo", list(lo[:dim]), "a box standing on the floor (lo on the vertical axis 0)")
+        if lo[up] > 0.0 and item.get("floating") is None:
+            raise ConfigError(f"{where}.lo", list(lo[:dim]), "a box standing on the floor (lo on the vertical axis "
+                                                             "0), unless it floats")
         displaces = item.get("displaces_fluid", False)
         if not isinstance(displaces, bool):
             raise ConfigError(f"{where}.displaces_fluid", displaces, "true or false")
         obstacle = Obstacle(name, lo, hi, offsets, displaces)
+        if item.get("motion") is not None and item.get("floating") is not None:
+            raise ConfigError(where, name, "one of motion (prescribed) and floating (moved by the fluid), not both")
         if item.get("motion") is not None:
             obstacle.motion = _motion(f"{where}.motion", item["motion"], obstacle, tank, dim)
+        if item.get("floating") is not None:
+            obstacle.motion = _floating(f"{where}.floating", item["floating"], obstacle, dim)
         obstacles.append(obstacle)
     _unique("obstacles", [o.name for o in obstacles])
     return obstacles
@@ -364,6 +371,61 @@ def _motion(where, value, obstacle, tank, dim) -> bodies.Motion:
             raise ConfigError(where, value, f"a motion that keeps the box in the tank: along axis {ax} it reaches "
                                             f"[{low:.4g}, {high:.4g}] m of [0, {tank[ax]:g}]")
     return motion
+
+
+FLOATING_KEYS = ("density", "mass", "centre_of_mass", "inertia", "translate", "rotate", "release", "velocity",
+                 "omega")
+
+
+def _flags(where, value, length) -> tuple:
+    if isinstance(value, bool):
+        value = [value] * length
+    if not isinstance(value, list) or len(value) != length or not all(isinstance(v, bool) for v in value):
+        raise ConfigError(where, value, f"true, false or a list of {length} of them (per axis: free or held)")
+    return tuple(value)
+
+
+def _floating(where, value, obstacle, dim) -> bodies.Floating:
+    """A floating obstacle (sph/bodies.py): its mass from ``density`` x its box's volume (area per
+    unit depth in 2D) or given, its centre of mass (default the box's centre), its inertia about
+    that (default a uniform solid box's, carried to the centre of mass), which axes it may move
+    along and turn about (2D: translate [x, y], rotate about z), when it is let go, and its
+    velocity and angular velocity then."""
+    item = _mapping(where, value, FLOATING_KEYS)
+    if ("density" in item) == ("mass" in item):
+        raise ConfigError(where, value, "one of density [kg/m^3] and mass [kg; kg/m in 2D]")
+    size = [h - lo for lo, h in zip(obstacle.lo[:dim], obstacle.hi[:dim])]
+    if "density" in item:
+        mass = _number(f"{where}.density", item["density"], lo=0.0, lo_open=True) * math.prod(size)
+    else:
+        mass = _number(f"{where}.mass", item["mass"], lo=0.0, lo_open=True)
+    centre = obstacle.centre(dim)
+    com = _pad3(_vector(f"{where}.centre_of_mass", item["centre_of_mass"], dim)) if "centre_of_mass" in item else centre
+    if "inertia" in item:
+        given = item["inertia"]
+        if dim == 2:
+            inertia = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0),
+                       (0.0, 0.0, _number(f"{where}.inertia", given, lo=0.0, lo_open=True)))
+        elif isinstance(given, list) and len(given) == 3 and all(isinstance(row, list) for row in given):
+            inertia = tuple(_vector(f"{where}.inertia[{k}]", row, 3) for k, row in enumerate(given))
+        else:
+            inertia = tuple(tuple(d if j == k else 0.0 for j in range(3))
+                            for k, d in enumerate(_vector(f"{where}.inertia", given, 3, lo=0.0)))
+    else:
+        about_centre = np.asarray(bodies.box_inertia(mass, obstacle.lo, obstacle.hi, dim))
+        d = np.asarray(com) - np.asarray(centre)
+        shifted = about_centre - mass * (d @ d * np.eye(3) - np.outer(d, d))  # parallel axes, to the centre of mass
+        inertia = tuple(tuple(float(c) for c in row) for row in (shifted if dim == 3 else np.diag(
+            [0.0, 0.0, shifted[2, 2]])))
+    translate = _flags(f"{where}.translate", item.get("translate", True), dim) + ((False,) if dim == 2 else ())
+    rotate = _flags(f"{where}.rotate", item.get("rotate", True), 1 if dim == 2 else 3)
+    rotate = (False, False, rotate[0]) if dim == 2 else rotate
+    velocity = _pad3(_vector(f"{where}.velocity", item.get("velocity", [0.0] * dim), dim))
+    omega = (0.0, 0.0, _number(f"{where}.omega", item.get("omega", 0.0))) if dim == 2 else \
+        _vector(f"{where}.omega", item.get("omega", [0.0] * 3), 3)
+    return bodies.Floating(mass=mass, centre=com, inertia=inertia, translate=translate, rotate=rotate,
+                           release=_number(f"{where}.release", item.get("release", 0.0), lo=0.0),
+                           velocity=velocity, omega=omega)
 
 
 def _zones(items, tank, dim, obstacles) -> list:

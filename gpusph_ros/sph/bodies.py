@@ -1,17 +1,18 @@
-"""Prescribed rigid motion of a body's boundary particles (issue 45: bodies that move).
+"""Bodies that move (issue 45): a body's boundary particles on a prescribed path, or a floating body
+moved by the fluid, gravity and its own inertia.
 
-A body's motion is a translation d(t) and a rotation by the angle theta(t) about a fixed unit axis n
-through the point c (the centre, where the body stands at t = 0). A particle of the body that stood
-at r0 at t = 0 stands at, and moves with (Rodrigues' rotation R; rho = x - c - d, its arm from
-the moved centre):
+Each moving body has a reference point c0 where the scene puts it at t = 0 (a prescribed body's
+centre of rotation, a floating body's centre of mass) and a pose at time t: the point's position X
+and the body's rotation q (a unit quaternion, the identity at t = 0). A particle of the body that
+stood at r0 stands at, and moves with (rho = x - X, its arm):
 
-    x = c + d + R(n, theta) (r0 - c)
-    v = d' + theta' n x rho
-    a = d'' + theta'' n x rho + theta'^2 n x (n x rho)
+    x = X + R(q) (r0 - c0)
+    v = V + omega x rho
+    a = A + alpha x rho + omega x (omega x rho)
 
-as DualSPHysics' and GPUSPH's moving bodies do (DualSPHysics' ``MotionSinusoidal`` /
-``MotionRectSinusoidal``: a sinusoid of the displacement and of the angle). Two laws, each starting
-where the scene put the body:
+Prescribed motion (DualSPHysics' ``MotionSinusoidal`` / ``MotionRectSinusoidal``): a translation d(t)
+and a rotation by theta(t) about a fixed unit axis n through c0, X = c0 + d, each starting where the
+scene put the body:
 
 - ``sinusoid``: d = A [sin(omega t + phi) - sin(phi)] and theta = Theta [sin(omega t + phi) -
   sin(phi)], omega = 2 pi / period: a piston (A along the flume) or a flap (Theta about its hinge);
@@ -20,13 +21,27 @@ where the scene put the body:
   displacement D over the duration, starting and ending at rest with a continuous acceleration
   (the velocity 1 - cos(2 pi s) times D / duration), no rotation.
 
-The solver sets the body's particles on their path at each stage of a step (the step's start, the
-predictor's half step, the corrector's end: ``move_walls``), and stores their acceleration, which
-the extrapolated-pressure wall's (g - a_w) term reads (boundaries/adami.py). The fluid sees the
-wall's velocity through the pair terms as it sees a fixed wall's zero. A fixed body takes none of
-this: a scene without motion launches nothing more and steps bit for bit as before.
-"""
+A floating body (DualSPHysics' floatings, GPUSPH's floating bodies) integrates Newton's and Euler's
+laws for a rigid body in the solver's own predictor-corrector, from the force and torque the fluid
+exerts on its particles (the reaction the force pass leaves on each, F = sum m_i acc_i, T = sum
+rho_i x m_i acc_i about X) and gravity:
 
+    V' = F / M + g,  X' = V,  L' = T,  omega = I_w^-1 L,  I_w = R I_body R^T,  q' = (omega / 2) q
+
+with the angular momentum L in the world frame as the state: the gyroscopic term omega x I omega of
+Euler's equations in the body frame (which DualSPHysics drops) is then exact, and a free body keeps
+L to round-off. Each stage is the fluid's: the predictor advances by dt / 2 with the rates and
+velocities at t, the corrector by dt from t with those at t + dt / 2 (the rotation by the angle
+omega dt about omega, as a quaternion). Constrained degrees of freedom have their force and torque
+zeroed (and their angular velocity: a 2D body turns about z only). Until its ``release`` time a
+floating body is held where it stands.
+
+The solver sets the bodies' poses at each stage of a step (the step's start, the half step, the
+candidate: ``body_poses``) and each body's particles on them (``move_walls``), with their velocity
+and acceleration, which the extrapolated-pressure wall's (g - a_w) term reads (boundaries/adami.py);
+the fluid sees the wall's velocity through the pair terms as it sees a fixed wall's zero. A scene
+without a moving body launches none of this and steps bit for bit as before.
+"""
 import functools
 import math
 from dataclasses import dataclass
@@ -35,9 +50,10 @@ from types import SimpleNamespace
 import numpy as np
 import warp as wp
 
+from . import health
 from .state import BOUNDARY, DT, T
 
-FIXED, SINUSOID, MOVE = 0, 1, 2
+FIXED, SINUSOID, MOVE, FLOATING = 0, 1, 2, 3
 LAWS = ("sinusoid", "move")  # the scene's ``motion.type``
 LAW_ID = {"sinusoid": SINUSOID, "move": MOVE}
 
@@ -47,7 +63,7 @@ class Motion:
     """One body's prescribed motion (the module's docstring): SI units, angles in radians."""
 
     law: str = "sinusoid"
-    centre: tuple = (0.0, 0.0, 0.0)  # [m] the rotation's centre at t = 0
+    centre: tuple = (0.0, 0.0, 0.0)  # [m] c0, the rotation's centre at t = 0
     amplitude: tuple = (0.0, 0.0, 0.0)  # [m] sinusoid: A; move: the displacement D
     period: float = 0.0  # [s] sinusoid
     phase: float = 0.0  # [rad] sinusoid's phi
@@ -57,22 +73,50 @@ class Motion:
     duration: float = 0.0  # [s] move
 
     def peak_speed(self, reach: float) -> float:
-        """The largest speed [m/s] of a particle at most ``reach`` [m] from the centre: the time
-        step's and the neighbour lists' bound, and what the scene's check holds under c0 / 10."""
+        """The largest speed [m/s] of a particle at most ``reach`` [m] from the centre: what the
+        scene's check holds under c0 / 10."""
         if self.law == "move":
             return 2.0 * float(np.linalg.norm(self.amplitude)) / self.duration
         omega = 2.0 * math.pi / self.period
         return omega * (float(np.linalg.norm(self.amplitude)) + abs(self.angle) * reach)
 
 
+@dataclass(frozen=True)
+class Floating:
+    """A floating rigid body (the module's docstring): its mass [kg, kg/m in 2D], centre of mass at
+    t = 0 [m], inertia about it in the body's frame (3 x 3, [kg m^2]), which translations and
+    rotations are free (per world axis), and when it is let go [s]."""
+
+    mass: float
+    centre: tuple
+    inertia: tuple
+    translate: tuple = (True, True, True)
+    rotate: tuple = (True, True, True)
+    release: float = 0.0
+    velocity: tuple = (0.0, 0.0, 0.0)  # [m/s] at t = 0 (once released)
+    omega: tuple = (0.0, 0.0, 0.0)  # [rad/s] at t = 0
+
+
+def box_inertia(mass: float, lo, hi, dim: int) -> tuple:
+    """The inertia tensor of a uniform solid box [lo, hi] of ``mass`` about its centre: diagonal, M
+    (b^2 + c^2) / 12 and its permutations; in 2D the box's section turning about z, M (a^2 + b^2) /
+    12 per unit depth."""
+    a, b, c = (float(top - bottom) for bottom, top in zip(lo, hi))
+    if dim == 2:
+        c = 0.0
+    return ((mass * (b * b + c * c) / 12.0, 0.0, 0.0), (0.0, mass * (a * a + c * c) / 12.0, 0.0),
+            (0.0, 0.0, mass * (a * a + b * b) / 12.0))
+
+
 @functools.lru_cache(maxsize=None)
 def build(scalar):
     vec = wp.types.vector(3, scalar)
+    healthy = health.build(scalar).healthy
 
     @wp.struct
     class Law:
-        kind: int  # FIXED, SINUSOID or MOVE
-        centre: wp.vec3d
+        kind: int  # FIXED, SINUSOID, MOVE or FLOATING
+        centre: wp.vec3d  # c0
         amplitude: wp.vec3d
         omega: wp.float64
         phase: wp.float64
@@ -80,10 +124,36 @@ def build(scalar):
         axis: wp.vec3d
         start: wp.float64
         duration: wp.float64
+        mass: wp.float64  # floating: M, the body frame's inertia, the free axes, the release time
+        inertia: wp.mat33d
+        inv_inertia: wp.mat33d
+        translate: wp.vec3d  # 1 where free, 0 where held
+        rotate: wp.vec3d
+        release: wp.float64
+
+    @wp.struct
+    class Rigid:
+        """A floating body's state: centre of mass, its velocity, rotation, angular momentum (world)."""
+
+        x: wp.vec3d
+        v: wp.vec3d
+        q: wp.quatd
+        ang: wp.vec3d
+
+    @wp.struct
+    class Pose:
+        """Where a body stands at one stage and how it moves: X, q, V, omega, A, alpha."""
+
+        x: wp.vec3d
+        q: wp.quatd
+        v: wp.vec3d
+        w: wp.vec3d
+        a: wp.vec3d
+        alpha: wp.vec3d
 
     @wp.func
     def profile(law: Law, t: wp.float64) -> wp.vec3d:
-        """(f, f', f'') of the law's time profile at t: d = f A and theta = f Theta."""
+        """(f, f', f'') of a prescribed law's time profile at t: d = f A and theta = f Theta."""
         if law.kind == SINUSOID:
             s = wp.sin(law.omega * t + law.phase)
             c = wp.cos(law.omega * t + law.phase)
@@ -100,37 +170,124 @@ def build(scalar):
         return wp.vec3d(wp.float64(0.0), wp.float64(0.0), wp.float64(0.0))
 
     @wp.func
-    def rotate(n: wp.vec3d, theta: wp.float64, r: wp.vec3d) -> wp.vec3d:
-        """Rodrigues: r rotated by theta about the unit axis n."""
-        c = wp.cos(theta)
-        return r * c + wp.cross(n, r) * wp.sin(theta) + n * (wp.dot(n, r) * (wp.float64(1.0) - c))
+    def world_inertia_inv(law: Law, q: wp.quatd) -> wp.mat33d:
+        """I_w^-1 = R I_body^-1 R^T."""
+        r = wp.quat_to_matrix(q)
+        return r * law.inv_inertia * wp.transpose(r)
+
+    @wp.func
+    def angular_velocity(law: Law, body: Rigid) -> wp.vec3d:
+        """omega = I_w^-1 L, zero about the held axes."""
+        return wp.cw_mul(world_inertia_inv(law, body.q) * body.ang, law.rotate)
+
+    @wp.func
+    def turned(q: wp.quatd, w: wp.vec3d, dt: wp.float64) -> wp.quatd:
+        """q turned by the angle |w| dt about w (world frame), normalised."""
+        angle = wp.length(w) * dt
+        if angle <= wp.float64(0.0):
+            return q
+        return wp.normalize(wp.quat_from_axis_angle(wp.normalize(w), angle) * q)
+
+    @wp.func
+    def prescribed_pose(law: Law, t: wp.float64) -> Pose:
+        f = profile(law, t)
+        pose = Pose()
+        pose.x = law.centre + law.amplitude * f[0]
+        pose.q = wp.quat_from_axis_angle(law.axis, law.angle * f[0])
+        pose.v = law.amplitude * f[1]
+        pose.w = law.axis * (law.angle * f[1])
+        pose.a = law.amplitude * f[2]
+        pose.alpha = law.axis * (law.angle * f[2])
+        return pose
 
     @wp.kernel(enable_backward=False, module="unique")
-    def move_walls(laws: wp.array(dtype=Law), clock: wp.array(dtype=wp.float64), factor: wp.float64,
-                   ptype: wp.array(dtype=wp.int32), body: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32),
-                   rest: wp.array(dtype=wp.vec3d), pos: wp.array(dtype=vec), vel: wp.array(dtype=vec),
-                   acc: wp.array(dtype=vec)):
-        """Each moving body's particles where its law puts them at t + factor dt, with their
-        velocity and acceleration (the module's docstring); ``rest`` is in the caller's order."""
+    def body_poses(laws: wp.array(dtype=Law), clock: wp.array(dtype=wp.float64), factor: wp.float64,
+                   gravity: wp.vec3d, base: wp.array(dtype=Rigid), rates_at: wp.array(dtype=Rigid),
+                   sums: wp.array2d(dtype=wp.vec3d), out: wp.array(dtype=Rigid), poses: wp.array(dtype=Pose)):
+        """Each body's pose at t + factor dt: a prescribed body's from its law; a floating body's
+        state advanced from ``base`` by factor dt with the velocities of ``rates_at`` and the last
+        force evaluation's force and torque (sums[b, 0], sums[b, 1]) into ``out`` (factor 0: base
+        itself), its acceleration from those."""
+        b = wp.tid()
+        law = laws[b]
+        t = clock[T] + factor * clock[DT]
+        if law.kind == SINUSOID or law.kind == MOVE:
+            poses[b] = prescribed_pose(law, t)
+            return
+        if law.kind != FLOATING:
+            return
+        body = base[b]
+        force = wp.cw_mul(sums[b, 0] + gravity * law.mass, law.translate)
+        torque = wp.cw_mul(sums[b, 1], law.rotate)
+        if t <= law.release:  # held until released: it stands where it is, at rest
+            force = wp.vec3d(wp.float64(0.0), wp.float64(0.0), wp.float64(0.0))
+            torque = force
+        if factor > wp.float64(0.0) and t > law.release:
+            dt = factor * clock[DT]
+            at = rates_at[b]
+            body.x = body.x + at.v * dt
+            body.v = body.v + force * (dt / law.mass)
+            body.q = turned(body.q, angular_velocity(law, at), dt)
+            body.ang = body.ang + torque * dt
+        out[b] = body
+        w = angular_velocity(law, body)
+        pose = Pose()
+        pose.x = body.x
+        pose.q = body.q
+        pose.v = body.v
+        pose.w = w
+        pose.a = force / law.mass
+        # Euler's equations in the world frame: I_w alpha = T - omega x L
+        pose.alpha = wp.cw_mul(world_inertia_inv(law, body.q) * (torque - wp.cross(w, body.ang)), law.rotate)
+        poses[b] = pose
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def move_walls(laws: wp.array(dtype=Law), poses: wp.array(dtype=Pose), ptype: wp.array(dtype=wp.int32),
+                   body: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32), rest: wp.array(dtype=wp.vec3d),
+                   pos: wp.array(dtype=vec), vel: wp.array(dtype=vec), acc: wp.array(dtype=vec)):
+        """Each moving body's particles on its pose (the module's docstring), with their velocity and
+        acceleration; ``rest`` is in the caller's order."""
         i = wp.tid()
         b = body[i]
         if b < 0 or ptype[i] != BOUNDARY:
             return
-        law = laws[b]
-        if law.kind == FIXED:
+        if laws[b].kind == FIXED:
             return
-        f = profile(law, clock[T] + factor * clock[DT])
-        theta = law.angle * f[0]
-        d = law.amplitude * f[0]
-        arm = rotate(law.axis, theta, rest[ids[i]] - law.centre)
-        spin = law.angle * f[1]
-        a = law.amplitude * f[2] + wp.cross(law.axis, arm) * (law.angle * f[2]) \
-            + wp.cross(law.axis, wp.cross(law.axis, arm)) * (spin * spin)
-        x = law.centre + d + arm
-        u = law.amplitude * f[1] + wp.cross(law.axis, arm) * spin
+        pose = poses[b]
+        arm = wp.quat_rotate(pose.q, rest[ids[i]] - laws[b].centre)
+        x = pose.x + arm
+        u = pose.v + wp.cross(pose.w, arm)
+        a = pose.a + wp.cross(pose.alpha, arm) + wp.cross(pose.w, wp.cross(pose.w, arm))
         pos[i] = vec(scalar(x[0]), scalar(x[1]), scalar(x[2]))
         vel[i] = vec(scalar(u[0]), scalar(u[1]), scalar(u[2]))
         acc[i] = vec(scalar(a[0]), scalar(a[1]), scalar(a[2]))
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def wrench_sums(laws: wp.array(dtype=Law), poses: wp.array(dtype=Pose), ptype: wp.array(dtype=wp.int32),
+                    body: wp.array(dtype=wp.int32), pos: wp.array(dtype=vec), mass: wp.array(dtype=scalar),
+                    acc: wp.array(dtype=vec), sums: wp.array2d(dtype=wp.vec3d)):
+        """Each floating body's force and torque about its centre of mass from the fluid: sum m_i
+        acc_i and sum rho_i x m_i acc_i over its particles (the force pass's reactions). One launch:
+        CPU atomics are not atomic across the threads of a split launch."""
+        i = wp.tid()
+        b = body[i]
+        if b < 0 or ptype[i] != BOUNDARY:
+            return
+        if laws[b].kind != FLOATING:
+            return
+        a = acc[i]
+        f = wp.vec3d(wp.float64(a[0]), wp.float64(a[1]), wp.float64(a[2])) * wp.float64(mass[i])
+        x = pos[i]
+        arm = wp.vec3d(wp.float64(x[0]), wp.float64(x[1]), wp.float64(x[2])) - poses[b].x
+        wp.atomic_add(sums, b, 0, f)
+        wp.atomic_add(sums, b, 1, wp.cross(arm, f))
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def commit_rigid(fail: wp.array(dtype=wp.int32), candidate: wp.array(dtype=Rigid), state: wp.array(dtype=Rigid)):
+        """The candidate's floating bodies become the state, if the step is healthy."""
+        b = wp.tid()
+        if healthy(fail):
+            state[b] = candidate[b]
 
     @wp.kernel(enable_backward=False, module="unique")
     def work_on_fluid(laws: wp.array(dtype=Law), clock: wp.array(dtype=wp.float64), ptype: wp.array(dtype=wp.int32),
@@ -152,15 +309,45 @@ def build(scalar):
         table = []
         for m in motions or [None]:
             law = Law()
-            law.kind = FIXED if m is None else LAW_ID[m.law]
-            if m is not None:
+            law.kind = FIXED
+            law.axis, law.rotate, law.translate = wp.vec3d(0.0, 0.0, 1.0), wp.vec3d(0.0), wp.vec3d(0.0)
+            law.mass = 1.0
+            law.release = -1.0
+            if isinstance(m, Motion):
                 axis = np.asarray(m.axis, dtype=np.float64)
+                law.kind = LAW_ID[m.law]
                 law.centre, law.amplitude = wp.vec3d(*m.centre), wp.vec3d(*m.amplitude)
                 law.omega = 2.0 * math.pi / m.period if m.law == "sinusoid" else 0.0
                 law.phase, law.angle = m.phase, m.angle
                 law.axis = wp.vec3d(*(axis / np.linalg.norm(axis)))
                 law.start, law.duration = m.start, m.duration
+            elif isinstance(m, Floating):
+                inertia = np.asarray(m.inertia, dtype=np.float64)
+                # a 2D body's only inertia is about z: the others are set to 1 and their axes held
+                inverse = np.diag([1.0 / d if d > 0.0 else 0.0 for d in np.diag(inertia)]) \
+                    if np.allclose(inertia, np.diag(np.diag(inertia))) else np.linalg.inv(inertia)
+                law.kind = FLOATING
+                law.centre = wp.vec3d(*m.centre)
+                law.mass, law.release = m.mass, m.release
+                law.inertia, law.inv_inertia = wp.mat33d(*inertia.ravel()), wp.mat33d(*inverse.ravel())
+                law.translate = wp.vec3d(*(1.0 if f else 0.0 for f in m.translate))
+                law.rotate = wp.vec3d(*(1.0 if f else 0.0 for f in m.rotate))
             table.append(law)
         return wp.array(table, dtype=Law, device=device)
 
-    return SimpleNamespace(Law=Law, move_walls=move_walls, work_on_fluid=work_on_fluid, laws=laws)
+    def rigid_states(motions: list, device) -> wp.array:
+        """Each body's floating state at t = 0: at its centre, at rest, unturned."""
+        table = []
+        for m in motions or [None]:
+            body = Rigid()
+            body.x = wp.vec3d(*(m.centre if m is not None else (0.0, 0.0, 0.0)))
+            body.v, body.ang, body.q = wp.vec3d(0.0), wp.vec3d(0.0), wp.quatd(0.0, 0.0, 0.0, 1.0)
+            if isinstance(m, Floating):
+                body.v = wp.vec3d(*m.velocity)
+                body.ang = wp.vec3d(*(np.asarray(m.inertia, dtype=np.float64) @ np.asarray(m.omega, dtype=np.float64)))
+            table.append(body)
+        return wp.array(table, dtype=Rigid, device=device)
+
+    return SimpleNamespace(Law=Law, Rigid=Rigid, Pose=Pose, body_poses=body_poses, move_walls=move_walls,
+                           wrench_sums=wrench_sums, commit_rigid=commit_rigid, work_on_fluid=work_on_fluid,
+                           laws=laws, rigid_states=rigid_states)

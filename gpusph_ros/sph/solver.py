@@ -160,9 +160,18 @@ class Solver:
         # prescribed motion (bodies.py): each body's law, and where its particles stood at t = 0 in
         # the caller's order (``ids`` finds them after a reorder); a scene without motion has none
         self._moving = any(m is not None for m in cfg.motions)
+        self._floating = any(isinstance(m, bodies.Floating) for m in cfg.motions)
         if self._moving:
-            self._laws = bodies.build(s).laws(cfg.motions, dev)
+            B = bodies.build(s)
+            self._laws = B.laws(cfg.motions, dev)
             self._rest = arr(np.asarray(particles.pos, dtype=np.float64), wp.vec3d)
+            nb = len(cfg.motions)
+            self._poses = wp.zeros(nb, dtype=B.Pose, device=dev)
+            # the floating bodies' state, half step and candidate, and the last evaluation's force
+            # and torque on each
+            self._rigid, self._rigid_h, self._rigid_c = (B.rigid_states(cfg.motions, dev) for _ in range(3))
+            self._body_sums = wp.zeros((nb, 2), dtype=wp.vec3d, device=dev)
+            self._gravity64 = wp.vec3d(*cfg.gravity)
         self.fields = self._make_fields(self.pos, self.vel, self.rho, shared)
         self._fields_h = self._make_fields(self._pos_h, self._vel_h, self._rho_h, shared)
         self._fields_c = self._make_fields(self._pos_c, self._vel_c, self._rho_c, shared)
@@ -234,6 +243,7 @@ class Solver:
             self.launch(k.sps_strain, n, [p, nl.grid, nl.nbr, nl.count, f, which])
         self.launch(k.interact, n, [p, nl.grid, nl.nbr, nl.count, f, self._plane_pt, self._plane_n, self.acc,
                                     self._drho, self._xsph, self._shift, self._maxima, self._clumped, which])
+        self._body_wrench(f)
 
     def _integrate(self, factor: float, base, vel_rate, out, which: int = EVERY_LEVEL):
         """out = base advanced by ``factor`` of each selected particle's own step (passes.integrate)
@@ -266,11 +276,11 @@ class Solver:
         state, half, candidate = (self.pos, self.vel, self.rho), self._half, self._candidate
         if p.coarse_stride == 1:
             self._integrate(0.5, state, self.vel, half)
-            self._move_walls(0.5, *half[:2])
+            self._move_walls(0.5, *half[:2], into=1)
             self._walls_again(self._fields_h)
             self._forces(self._fields_h)
             self._integrate(1.0, state, self._vel_h, candidate)
-            self._move_walls(1.0, *candidate[:2])
+            self._move_walls(1.0, *candidate[:2], into=2)
             if self._moving:
                 wp.launch(bodies.build(self.scalar).work_on_fluid, dim=n,
                           inputs=[self._laws, self._clock, self.ptype, self.body, self.mass, self.acc, self._vel_h,
@@ -287,6 +297,9 @@ class Solver:
         wp.launch(k.commit, dim=n, inputs=[self._fail, self._faulty, self._pos_c, self._vel_c, self._rho_c, self.pos,
                                            self.vel, self.rho, self.ptype, self._needs_list, self.neighbours.stale],
                   device=dev)
+        if self._floating:
+            wp.launch(bodies.build(self.scalar).commit_rigid, dim=len(self.config.motions),
+                      inputs=[self._fail, self._rigid_c, self._rigid], device=dev)
         if self.config.zones:
             self._relevel()
         for hook in self._step_hooks:
@@ -296,13 +309,40 @@ class Solver:
         self.neighbours.moved(self.pos, self.vel, self._clock)
         wp.capture_if(self.flag(SHEPARD_DUE), on_true=self.shepard_filter, rebuild=False)
 
-    def _move_walls(self, factor: float, pos, vel):
-        """The moving bodies' particles at t + factor dt on their prescribed paths (bodies.py), with
-        their velocity and acceleration; nothing in a scene without motion."""
-        if self._moving:
-            wp.launch(bodies.build(self.scalar).move_walls, dim=self.n,
-                      inputs=[self._laws, self._clock, factor, self.ptype, self.body, self.ids, self._rest, pos, vel,
-                              self.wall_acc], device=self.device)
+    def _move_walls(self, factor: float, pos, vel, into: int = 0):
+        """The moving bodies' poses at t + factor dt (bodies.body_poses: a floating body's state
+        advanced into the half step, ``into`` 1, with the rates at t, or into the candidate, 2, with
+        those at the half step) and their particles on them, with their velocity and acceleration;
+        nothing in a scene without motion."""
+        if not self._moving:
+            return
+        B, dev = bodies.build(self.scalar), self.device
+        base, rates_at, out = [(self._rigid, self._rigid, self._rigid), (self._rigid, self._rigid, self._rigid_h),
+                               (self._rigid, self._rigid_h, self._rigid_c)][into]
+        wp.launch(B.body_poses, dim=len(self.config.motions),
+                  inputs=[self._laws, self._clock, factor, self._gravity64, base, rates_at, self._body_sums, out,
+                          self._poses], device=dev)
+        wp.launch(B.move_walls, dim=self.n, inputs=[self._laws, self._poses, self.ptype, self.body, self.ids,
+                                                    self._rest, pos, vel, self.wall_acc], device=dev)
+
+    def _body_wrench(self, f):
+        """Each floating body's force and torque from the fluid of the force pass just made on ``f``."""
+        if self._floating:
+            self._body_sums.zero_()
+            wp.launch(bodies.build(self.scalar).wrench_sums, dim=self.n,
+                      inputs=[self._laws, self._poses, self.ptype, self.body, f.pos, self.mass, self.acc,
+                              self._body_sums], device=self.device)
+
+    def body_states(self) -> list:
+        """Each body's floating state as of the last step (a host read: for outputs), by body id:
+        position of the centre of mass, velocity, rotation quaternion (x, y, z, w) and angular
+        momentum (world frame); None for a body that does not float."""
+        if not self._floating:
+            return [None] * len(self.config.motions)
+        rigid = self._rigid.numpy()
+        return [{"position": np.array(r["x"]), "velocity": np.array(r["v"]), "quaternion": np.array(r["q"]),
+                 "angular_momentum": np.array(r["ang"])} if isinstance(m, bodies.Floating) else None
+                for r, m in zip(rigid, self.config.motions)]
 
     def _census(self):
         """The fluid's energy and clumping, checked against the run's limits (health.census)."""
