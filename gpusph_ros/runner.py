@@ -5,7 +5,8 @@ Outputs fall at k / output_rate for k = 0, 1, ... up to the end time; each carri
 first, then the measurements of the scene's probes and bodies (and an arrow marker per body), and
 every ``particle_every``-th output the particle cloud. Once per run (latched, and first in a
 recording): ``~/scene``, the run's description as YAML, ``~/geometry``, the scene as markers, and
-the body frames on ``/tf_static`` where tf2_msgs is installed.
+the fixed bodies' frames on ``/tf_static`` where tf2_msgs is installed; a moving body's frame goes
+on ``/tf`` with each output.
 """
 import dataclasses
 import datetime
@@ -135,7 +136,7 @@ class Run:
         out = [(f"{self.namespace}/scene", String(data=yaml.safe_dump(described, sort_keys=False))),
                (f"{self.namespace}/geometry", markers.geometry(world, self.model.config.dx, self.frame_id, t))]
         transforms = markers.body_transforms(world, self.frame_id, t)
-        if transforms is not None and world.obstacles:
+        if transforms is not None:
             out.append(("/tf_static", transforms))
         return self._restamped(out, t)
 
@@ -208,6 +209,10 @@ class Run:
         out = [("/clock", messages.clock(t))]
         sample = self.measurements.sample()
         out += messages.measurement_messages(t, sample, self.scene, self.namespace, self.frame_id)
+        # the moving bodies' frames, where tf2_msgs is installed
+        moving = markers.body_transforms(self.model.scene, self.frame_id, t, sample["poses"])
+        if sample["poses"] and moving is not None:
+            out.append(("/tf", moving))
         if self._force_scales:
             out.append((f"{self.namespace}/bodies/force_arrows",
                         markers.force_arrows(t, sample["wrenches"], self.model.scene, self._force_scales,

@@ -273,3 +273,72 @@ def test_a_floating_bodys_mass_and_inertia_come_from_its_box_unless_given():
     d = np.array([0.0, 0.0, 0.02])  # from the box's centre (0.5, 0.45, 0.30)
     about_centre = np.diag([6.0 * (0.01 + 0.01) / 12, 6.0 * (0.04 + 0.01) / 12, 6.0 * (0.04 + 0.01) / 12])
     assert np.asarray(brick.inertia) == pytest.approx(about_centre - 6.0 * (d @ d * np.eye(3) - np.outer(d, d)))
+
+
+@pytest.mark.physics
+def test_a_moving_bodys_pose_odometry_and_wrench_are_published_and_recorded(tmp_path):
+    """A flap swinging about its hinge and a box floating beside it, run headless and recorded: each
+    output carries each moving body's pose (PoseStamped, world) and odometry (Odometry: its twist in
+    the body's frame) and its wrench in its own axes about its reference point; the recording holds
+    them as series. In the published axes a 2D scene's y is z and its turn about z one about -y:
+    the flap's pose at the last output is the law's (its hinge fixed, turned by theta about -y), its
+    odometry's angular rate theta' about -y, and the floating box's odometry is its body state's."""
+    from gpusph_ros.analysis.bag import read
+    from gpusph_ros.runner import Run
+    from gpusph_ros.scenes.settings import resolve
+
+    flap = {"type": "sinusoid", "angle_deg": -4.0, "period": 1.0, "phase_deg": -90.0, "centre": [0.07, 0.0]}
+    scene = parse_scene(piston_tank(flap, obstacles=[
+        {"name": "paddle", "lo": [0.04, 0.0], "hi": [0.1, 0.6], "motion": flap},
+        {"name": "box", "lo": [0.5, 0.26], "hi": [0.7, 0.36], "displaces_fluid": True,
+         "floating": {"density": 500.0}}]))
+    run = Run(scene, resolve(scene, sets=[f"dx={DX}", "end_time=0.3", "output_rate=20"]))
+    result = run.execute(run.open_recording(tmp_path / "bag"))
+    assert result["status"] == "completed"
+    rec = read(tmp_path / "bag")
+    t = rec.topic("bodies/paddle/pose")["t"][-1]
+    assert t == pytest.approx(0.3)
+    theta = math.radians(-4.0) * (math.sin(2 * math.pi * t - math.pi / 2) + 1.0)
+    rate = math.radians(-4.0) * 2 * math.pi * math.cos(2 * math.pi * t - math.pi / 2)
+    pose = rec.topic("bodies/paddle/pose")
+    assert pose["position"][-1] == pytest.approx([0.07, 0.0, 0.0], abs=1e-9)
+    assert pose["orientation"][-1] == pytest.approx([0.0, -math.sin(theta / 2), 0.0, math.cos(theta / 2)], abs=1e-7)
+    odometry = rec.topic("bodies/paddle/odom")
+    assert odometry["angular"][-1] == pytest.approx([0.0, -rate, 0.0], abs=1e-7)
+    box = run.solver.body_states()[1]
+    odometry = rec.topic("bodies/box/odom")
+    assert odometry["position"][-1] == pytest.approx([box["position"][0], 0.0, box["position"][1]], abs=1e-9)
+    assert len(rec.topic("bodies/box/wrench")["t"]) == len(odometry["t"]) == 7  # t = 0 too
+    assert pose["orientation"][0] == pytest.approx([0.0, 0.0, 0.0, 1.0]) and odometry["position"][0] == \
+        pytest.approx([0.6, 0.0, 0.31])
+    force = rec.topic("bodies/box/wrench")["force"][-1]
+    assert force[1] == 0.0 and force[2] > 0.0  # the fluid holds the box up (published z)
+
+
+@pytest.mark.unit
+def test_fixed_bodies_go_on_tf_static_and_moving_ones_on_tf(monkeypatch):
+    """tf2_msgs has no wheel: a stand-in TFMessage shows which frames each message lists and where."""
+    import sys
+    import types
+
+    from gpusph_ros.output import markers
+
+    fake = types.ModuleType("tf2_msgs.msg")
+    fake.TFMessage = lambda transforms: types.SimpleNamespace(transforms=transforms)
+    monkeypatch.setitem(sys.modules, "tf2_msgs", types.ModuleType("tf2_msgs"))
+    monkeypatch.setitem(sys.modules, "tf2_msgs.msg", fake)
+    flap = {"type": "sinusoid", "angle_deg": -4.0, "period": 1.0, "centre": [0.07, 0.0]}
+    scene = parse_scene(piston_tank(flap, obstacles=[
+        {"name": "paddle", "lo": [0.04, 0.0], "hi": [0.1, 0.6], "motion": flap},
+        {"name": "step", "lo": [0.8, 0.0], "hi": [0.9, 0.1]}]))
+    static = markers.body_transforms(scene, "world")
+    assert [tf.child_frame_id for tf in static.transforms] == ["world/step"]
+    theta = 0.1
+    pose = {"position": np.array([0.07, 0.0, 0.0]),
+            "quaternion": np.array([0.0, 0.0, math.sin(theta / 2), math.cos(theta / 2)])}
+    moving = markers.body_transforms(scene, "world", 0.5, {"paddle": pose})
+    (tf,) = moving.transforms
+    r = tf.transform.rotation
+    assert tf.child_frame_id == "world/paddle" and tf.header.frame_id == "world"
+    assert [r.x, r.y, r.z, r.w] == pytest.approx([0.0, -math.sin(theta / 2), 0.0, math.cos(theta / 2)])
+    assert tf.transform.translation.x == pytest.approx(0.07) and tf.transform.translation.z == 0.0

@@ -62,7 +62,7 @@ class Recording:
 # the measurement types, read into series; the latched description, markers and frames are not
 # measurements (and tf2_msgs may be missing where the recording is read)
 MEASURED = ("geometry_msgs/msg/Vector3Stamped", "geometry_msgs/msg/PointStamped", "geometry_msgs/msg/WrenchStamped",
-            "sensor_msgs/msg/FluidPressure")
+            "sensor_msgs/msg/FluidPressure", "geometry_msgs/msg/PoseStamped", "nav_msgs/msg/Odometry")
 
 
 def _values(msg) -> dict:
@@ -77,6 +77,14 @@ def _values(msg) -> dict:
         return {"force": (f.x, f.y, f.z), "torque": (m.x, m.y, m.z)}
     if kind == "FluidPressure":
         return {"v": msg.fluid_pressure}
+    if kind in ("PoseStamped", "Odometry"):
+        pose = msg.pose if kind == "PoseStamped" else msg.pose.pose
+        p, q = pose.position, pose.orientation
+        out = {"position": (p.x, p.y, p.z), "orientation": (q.x, q.y, q.z, q.w)}
+        if kind == "Odometry":  # the twist in the body's own frame
+            v, w = msg.twist.twist.linear, msg.twist.twist.angular
+            out |= {"linear": (v.x, v.y, v.z), "angular": (w.x, w.y, w.z)}
+        return out
     return {}
 
 

@@ -10,6 +10,7 @@ radius in it, the wall pressure read at its h: sensors.WallPressure); the pressu
 scene's dx, the thesis's definition of them."""
 import numpy as np
 
+from ..sph.bodies import quaternion_matrix
 from ..sph.levels import finest_in, spacing_at
 from .blocks import PressureBlockForce
 from .columns import ColumnMeans
@@ -35,7 +36,7 @@ class Measurements:
 
         def line_spacing(position):
             return finest_in(*vertical_line(position), cfg.zones, cfg.dx)
-        self.scene = scene
+        self.scene, self.solver = scene, solver
         points, self._slices = [], {}
         # points on wall and body faces, read by WallPressure: the sensors' and the obstacles' faces
         wall, wall_normals, self._sensors = [], [], {}
@@ -65,10 +66,15 @@ class Measurements:
             points.extend(pts)
         # each obstacle: its wrench, its pressure blocks, and its faces for the load from the wall
         # pressure (sensors.py)
-        self._wrenches, self._blocks, self._faces = {}, {}, {}
+        # a moving body's wrench is about where its reference point stands at the sample, in its own
+        # axes, and its faces and blocks, fixed in space, are not measured
+        self._wrenches, self._blocks, self._faces, self._moving = {}, {}, {}, {}
         for obstacle in scene.obstacles:
             centre = np.asarray(obstacle.centre(dim))
             self._wrenches[obstacle.name] = BodyWrench(solver, model.bodies[obstacle.name], centre)
+            if obstacle.motion is not None:
+                self._moving[obstacle.name] = (model.bodies[obstacle.name], centre)
+                continue
             self._blocks[obstacle.name] = PressureBlockForce(solver, obstacle.lo, obstacle.hi, obstacle.block_offsets)
             spacing = finest_in(obstacle.lo, obstacle.hi, cfg.zones, cfg.dx)
             pts, normals, areas = face_load_points(obstacle.lo, obstacle.hi, spacing, dim, scene.tank)
@@ -92,9 +98,11 @@ class Measurements:
         """{"points": {name: {vel, pressure, rho}}, "profiles": {name: {heights, vel}},
         "gauges": {name: elevation}, "sensors": {name: wall pressure}, "columns": {name: {vel, count}},
         "wrenches": {name: (force, torque)}, "pressure_loads": {name: (force, torque) from the wall
-        pressure}, "blocks": {name: {offset: (fx, upstream, downstream)}}}."""
+        pressure}, "blocks": {name: {offset: (fx, upstream, downstream)}}, "poses": {name: a moving
+        body's pose (Solver.body_poses)}}. A moving body's wrench is in its own axes about its
+        reference point."""
         out = {"points": {}, "profiles": {}, "gauges": {}, "sensors": {}, "columns": {}, "wrenches": {},
-               "pressure_loads": {}, "blocks": {}}
+               "pressure_loads": {}, "blocks": {}, "poses": {}}
         up = self.scene.dim - 1
         if self._points is not None:
             values = self._points.sample()
@@ -124,6 +132,14 @@ class Measurements:
                 out["columns"][name] = {"vel": values["vel"][k], "count": int(values["count"][k])}
         for name, wrench in self._wrenches.items():
             out["wrenches"][name] = wrench.sample()
+        if self._moving:
+            poses = self.solver.body_poses()
+            for name, (body, centre) in self._moving.items():
+                pose = out["poses"][name] = poses[body]
+                force, torque = out["wrenches"][name]
+                turn = quaternion_matrix(pose["quaternion"]).T
+                about = torque - np.cross(pose["position"] - centre, force)
+                out["wrenches"][name] = (turn @ force, turn @ about)
         for name, blocks in self._blocks.items():
             out["blocks"][name] = blocks.sample()
         return out

@@ -5,7 +5,9 @@ A 3D scene computes with z up and is published as it is. A 2D scene computes in 
 (up); it is published in the world's x-z plane through the fixed rotation (x, y, z) -> (x, -z, y)
 about x, so that z is up in every message, cloud and marker, and a torque about the 2D scene's z
 axis reads about -y. Each body has its own frame, ``<frame_id>/<body>``: the world's axes moved to
-the body's reference point (the centre of its box), which its wrench is given about.
+the body's reference point (the centre of its box), which its wrench is given about; a moving
+body's frame moves and turns with it (its pose and odometry are published), and its wrench is in
+those axes about its reference point (a floating body's centre of mass).
 """
 import numpy as np
 
@@ -26,3 +28,14 @@ def published(dim: int, values) -> tuple:
 def body_frame(frame_id: str, body: str) -> str:
     """The frame of ``body``'s wrench: a child of the world frame ``frame_id``."""
     return f"{frame_id}/{body}"
+
+
+def published_rotation(dim: int, rotation: np.ndarray) -> tuple:
+    """A rotation of the scene (3 x 3) as the published axes see it, as a unit quaternion (x, y, z,
+    w): T R T^T, T the turn of the axes (a 2D body's turn about z reads about -y)."""
+    m = turn(dim) @ rotation @ turn(dim).T
+    w = np.sqrt(max(0.0, 1.0 + m[0, 0] + m[1, 1] + m[2, 2])) / 2.0
+    x = np.copysign(np.sqrt(max(0.0, 1.0 + m[0, 0] - m[1, 1] - m[2, 2])) / 2.0, m[2, 1] - m[1, 2])
+    y = np.copysign(np.sqrt(max(0.0, 1.0 - m[0, 0] + m[1, 1] - m[2, 2])) / 2.0, m[0, 2] - m[2, 0])
+    z = np.copysign(np.sqrt(max(0.0, 1.0 - m[0, 0] - m[1, 1] + m[2, 2])) / 2.0, m[1, 0] - m[0, 1])
+    return tuple(float(c) + 0.0 for c in (x, y, z, w))

@@ -10,6 +10,7 @@ from geometry_msgs.msg import Point
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
+from ..sph.bodies import quaternion_matrix
 from . import frames
 from .messages import stamp
 
@@ -118,9 +119,12 @@ def force_arrows(t: float, wrenches: dict, scene, scales: dict, frame_id: str) -
     return MarkerArray(markers=out)
 
 
-def body_transforms(scene, frame_id: str, t: float = 0.0):
-    """The body frames (``frames.body_frame``) as a tf2_msgs/TFMessage for /tf_static, or None
-    where tf2_msgs is not installed (PyPI has no wheel of it; every ROS 2 install has it)."""
+def body_transforms(scene, frame_id: str, t: float = 0.0, poses: "dict | None" = None):
+    """The body frames (``frames.body_frame``) as a tf2_msgs/TFMessage, or None where tf2_msgs is
+    not installed (PyPI has no wheel of it; every ROS 2 install has it) or no body is listed:
+    without ``poses`` the fixed bodies' for /tf_static, each at its box's centre; with them
+    ({name: Solver.body_poses' pose}) the moving bodies' for /tf, each where it stands and turned
+    as it is."""
     try:
         from geometry_msgs.msg import TransformStamped
         from tf2_msgs.msg import TFMessage
@@ -128,10 +132,17 @@ def body_transforms(scene, frame_id: str, t: float = 0.0):
         return None
     out = []
     for o in scene.obstacles:
+        if (poses is None) != (o.motion is None):
+            continue
         tf = TransformStamped(child_frame_id=frames.body_frame(frame_id, o.name))
         tf.header.stamp, tf.header.frame_id = stamp(t), frame_id
-        x, y, z = frames.published(scene.dim, o.centre(scene.dim))
+        where, turned = o.centre(scene.dim), (0.0, 0.0, 0.0, 1.0)
+        if poses is not None:
+            where = poses[o.name]["position"]
+            turned = frames.published_rotation(scene.dim, quaternion_matrix(poses[o.name]["quaternion"]))
+        x, y, z = frames.published(scene.dim, where)
         tf.transform.translation.x, tf.transform.translation.y, tf.transform.translation.z = x, y, z
-        tf.transform.rotation.w = 1.0
+        r = tf.transform.rotation
+        r.x, r.y, r.z, r.w = turned
         out.append(tf)
-    return TFMessage(transforms=out)
+    return TFMessage(transforms=out) if out else None

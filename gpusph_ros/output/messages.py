@@ -8,10 +8,12 @@ import array
 
 import numpy as np
 from builtin_interfaces.msg import Time
-from geometry_msgs.msg import PointStamped, Vector3Stamped, WrenchStamped
+from geometry_msgs.msg import PointStamped, PoseStamped, Vector3Stamped, WrenchStamped
+from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import FluidPressure, PointCloud2, PointField
 
+from ..sph.bodies import quaternion_matrix
 from . import frames
 
 
@@ -104,6 +106,24 @@ def point(t, values, frame_id="world") -> PointStamped:
     return msg
 
 
+def body_motion(t, pose: dict, dim: int, frame_id: str, child: str) -> tuple:
+    """A moving body's pose (PoseStamped in the world frame) and odometry (Odometry: the pose, and
+    the twist in the body's own frame, ``child``), in the published axes, from a pose of
+    ``Solver.body_poses``."""
+    rotation = quaternion_matrix(pose["quaternion"])
+    position = frames.published(dim, pose["position"])
+    q = frames.published_rotation(dim, rotation)
+    stamped = _header(PoseStamped(), t, frame_id)
+    odometry = _header(Odometry(), t, frame_id)
+    odometry.child_frame_id = child
+    for target in (stamped.pose, odometry.pose.pose):
+        _vec(target.position, position)
+        target.orientation.x, target.orientation.y, target.orientation.z, target.orientation.w = q
+    _vec(odometry.twist.twist.linear, frames.published(dim, rotation.T @ pose["velocity"]))
+    _vec(odometry.twist.twist.angular, frames.published(dim, rotation.T @ pose["omega"]))
+    return stamped, odometry
+
+
 def pressure(t, value, frame_id="world") -> FluidPressure:
     msg = _header(FluidPressure(), t, frame_id)
     msg.fluid_pressure = float(value)
@@ -121,8 +141,9 @@ def measurement_messages(t: float, sample: dict, scene, namespace: str = "/sim_n
     sensor's reading (FluidPressure), depth-averaged
     velocity (Vector3Stamped), profile points (Vector3Stamped per height, h0, h1, ...), surface
     elevation (PointStamped at the gauge, z = elevation), the wrench on each body in its frame
-    (the net force on its particles, and the load of the wall pressure over its faces), and each
-    body's pressure-block force (WrenchStamped, force.x only)."""
+    (the net force on its particles, and the load of the wall pressure over its faces), each
+    body's pressure-block force (WrenchStamped, force.x only), and a moving body's pose and odometry
+    (body_motion)."""
     out = []
     probes = f"{namespace}/probes"
 
@@ -149,6 +170,10 @@ def measurement_messages(t: float, sample: dict, scene, namespace: str = "/sim_n
         for name, (force, torque) in loads.items():
             out.append((f"{namespace}/bodies/{name}/{kind}",
                         wrench(t, turned(force), turned(torque), frames.body_frame(frame_id, name))))
+    for name, pose in sample.get("poses", {}).items():
+        stamped, odometry = body_motion(t, pose, scene.dim, frame_id, frames.body_frame(frame_id, name))
+        out.append((f"{namespace}/bodies/{name}/pose", stamped))
+        out.append((f"{namespace}/bodies/{name}/odom", odometry))
     for name, by_offset in sample["blocks"].items():
         for offset, (fx, _, _) in by_offset.items():
             out.append((f"{namespace}/bodies/{name}/pressure_blocks/{block_topic(offset)}",

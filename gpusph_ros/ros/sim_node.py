@@ -12,9 +12,10 @@ wrench`` (WrenchStamped, force on the body's particles and torque about the body
 body's frame ``<frame_id>/<name>``), ``~/bodies/force_arrows`` (markers), ``~/bodies/<name>/
 pressure_blocks/dNNNmm`` (the thesis's pressure-block force), ``~/probes/<name>`` (Vector3Stamped
 velocity, FluidPressure, PointStamped surface level), ``/clock`` (before the outputs it stamps),
-``/diagnostics`` (1 Hz), and latched (transient local) ``~/scene``, ``~/geometry`` and, where tf2_msgs
-is installed, ``/tf_static``. z is up in every scene (``output.frames``); every stamp is simulated
-time.
+``/diagnostics`` (1 Hz), a moving body's ``~/bodies/<name>/pose`` (PoseStamped) and ``/odom``
+(Odometry), and latched (transient local) ``~/scene``, ``~/geometry`` and, where tf2_msgs is
+installed, ``/tf_static`` (the fixed bodies' frames; a moving body's go on ``/tf``). z is up in
+every scene (``output.frames``); every stamp is simulated time.
 Services (std_srvs): ``~/reset``, ``~/set_paused``, ``~/step``, ``~/record``, ``~/save_state`` and
 ``~/load_state`` (the run's whole state to and from ``state_file``).
 

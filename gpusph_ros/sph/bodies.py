@@ -97,6 +97,14 @@ class Floating:
     omega: tuple = (0.0, 0.0, 0.0)  # [rad/s] at t = 0
 
 
+def quaternion_matrix(q) -> np.ndarray:
+    """The rotation matrix of the unit quaternion q = (x, y, z, w) (Warp's order)."""
+    x, y, z, w = (float(c) for c in q)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+
+
 def box_inertia(mass: float, lo, hi, dim: int) -> tuple:
     """The inertia tensor of a uniform solid box [lo, hi] of ``mass`` about its centre: diagonal, M
     (b^2 + c^2) / 12 and its permutations; in 2D the box's section turning about z, M (a^2 + b^2) /

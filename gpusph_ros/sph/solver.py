@@ -216,6 +216,7 @@ class Solver:
         self._flags = arr(flags, wp.int32)
         self._flag_views = tuple(self._flags[k:k + 1] for k in range(N_FLAGS))
         wp.launch(self._passes.equation_of_state, dim=n, inputs=[self.params, self.fields], device=dev)
+        self._move_walls(0.0, self.pos, self.vel)  # the moving bodies' poses at t = 0, before any step
         self.boundary.prepare(self)
         if cfg.zones:
             wp.launch(levels.build(s).mark_spawned, dim=n, inputs=[self.params, self.pos, self.hsml, self.ptype,
@@ -332,6 +333,16 @@ class Solver:
             wp.launch(bodies.build(self.scalar).wrench_sums, dim=self.n,
                       inputs=[self._laws, self._poses, self.ptype, self.body, f.pos, self.mass, self.acc,
                               self._body_sums], device=self.device)
+
+    def body_poses(self) -> list:
+        """Each moving body's pose as of the last step (a host read: for outputs), by body id:
+        its reference point's position and velocity, its rotation quaternion (x, y, z, w) and
+        angular velocity, world frame; None for a fixed body."""
+        if not self._moving:
+            return [None] * len(self.config.motions)
+        poses = self._poses.numpy()
+        return [{"position": np.array(r["x"]), "quaternion": np.array(r["q"]), "velocity": np.array(r["v"]),
+                 "omega": np.array(r["w"])} if m is not None else None for r, m in zip(poses, self.config.motions)]
 
     def body_states(self) -> list:
         """Each body's floating state as of the last step (a host read: for outputs), by body id:
