@@ -21,11 +21,12 @@ import numpy as np
 import yaml
 from std_msgs.msg import String
 
+from .drive import BodyDriver
 from .measure import cloud
 from .measure.suite import Measurements
 from .output import frames, markers, messages, state_file
 from .scenes.build import build_run
-from .sph import checkpoint
+from .sph import bodies, checkpoint
 
 NAMESPACE = "/sim_node"
 # QoS the node offers and the recording states (rosbag2 replays with it): /clock as Gazebo's bridge
@@ -68,6 +69,18 @@ class Run:
         self.next_output = 0
         self.wall = 0.0
         self.torn = False  # a Ctrl-C landed inside a step: no checkpoint of this state
+        # driven bodies (drive.py) by name: their body id and their driver
+        self.drivers = {o.name: (self.model.bodies[o.name], BodyDriver(o.motion, cfg.dim, o.lo, o.hi, world.tank))
+                        for o in world.obstacles
+                        if isinstance(o.motion, bodies.Motion) and o.motion.law == "driven"}
+
+    def command(self, body: str, kind: str, stamp: float, a, b) -> tuple:
+        """A driven body's command (drive.BodyDriver.command: a ``pose`` or a ``twist`` in the
+        scene's axes, stamped in simulated time): (taken, what was done or why not)."""
+        if body not in self.drivers:
+            return False, (f"body: {body!r} is not a driven body of the scene (driven: "
+                           f"{', '.join(self.drivers) or 'none'})")
+        return self.drivers[body][1].command(kind, stamp, self.solver.time, a, b)
 
     @property
     def n_outputs(self) -> int:
@@ -228,6 +241,11 @@ class Run:
         k = self.next_output
         target = k / self.output.output_rate
         start = time.perf_counter()
+        if self.drivers:  # the driven bodies' segments to this output, from their last commands
+            poses = self.solver.body_poses()
+            for body, driver in self.drivers.values():
+                self.solver.drive(body, **driver.segment(self.solver.time, max(target - self.solver.time, 1.0e-9),
+                                                         poses[body]))
         try:
             self.solver.advance(target, interrupt)
             msgs = None

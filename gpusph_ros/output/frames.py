@@ -33,7 +33,30 @@ def body_frame(frame_id: str, body: str) -> str:
 def published_rotation(dim: int, rotation: np.ndarray) -> tuple:
     """A rotation of the scene (3 x 3) as the published axes see it, as a unit quaternion (x, y, z,
     w): T R T^T, T the turn of the axes (a 2D body's turn about z reads about -y)."""
-    m = turn(dim) @ rotation @ turn(dim).T
+    return quaternion_of(turn(dim) @ rotation @ turn(dim).T)
+
+
+def scene_vector(dim: int, values, axial: bool = False) -> np.ndarray:
+    """A point or vector given in the published axes, in the scene's: a 2D scene keeps its plane,
+    x and y, or for an ``axial`` vector (an angular velocity) its z."""
+    v = turn(dim).T @ np.asarray(values, dtype=float)
+    if dim == 2:
+        v = np.array([0.0, 0.0, v[2]]) if axial else np.array([v[0], v[1], 0.0])
+    return v
+
+
+def scene_rotation(dim: int, rotation: np.ndarray) -> np.ndarray:
+    """A rotation given in the published axes (3 x 3), in the scene's, as a unit quaternion (x, y,
+    z, w): T^T R T; a 2D scene keeps its turn about its z (the published -y)."""
+    m = turn(dim).T @ rotation @ turn(dim)
+    if dim == 2:
+        angle = np.arctan2(m[1, 0], m[0, 0])
+        return np.array([0.0, 0.0, np.sin(angle / 2), np.cos(angle / 2)])
+    return np.asarray(quaternion_of(m))
+
+
+def quaternion_of(m: np.ndarray) -> tuple:
+    """The unit quaternion (x, y, z, w) of the rotation matrix m."""
     w = np.sqrt(max(0.0, 1.0 + m[0, 0] + m[1, 1] + m[2, 2])) / 2.0
     x = np.copysign(np.sqrt(max(0.0, 1.0 + m[0, 0] - m[1, 1] - m[2, 2])) / 2.0, m[2, 1] - m[1, 2])
     y = np.copysign(np.sqrt(max(0.0, 1.0 - m[0, 0] + m[1, 1] - m[2, 2])) / 2.0, m[0, 2] - m[2, 0])

@@ -24,14 +24,17 @@ timers) answers whatever the layers below raise with a reason, logs it once, and
 unexpected error into an ERROR diagnostic; services run side by side and a ~/step waits only for
 the solver; after shut-down every service refuses, naming the state.
 """
+import collections
 import functools
 import os
 import sys
 import threading
 import time
 
+import numpy as np
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import PoseStamped, TwistStamped
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
@@ -43,9 +46,11 @@ from sensor_msgs.msg import PointCloud2
 from std_srvs.srv import SetBool, Trigger
 
 from .. import __version__
-from ..output import messages
+from ..drive import QUATERNION_TOLERANCE
+from ..output import frames, messages
 from ..runner import CLOCK_QOS, LATCHED_QOS, PARTICLES_QOS, Run
 from ..sph import ConfigError
+from ..sph.bodies import quaternion_matrix
 from ..sph.config import shown
 from . import node_params
 from .node_params import PARAMS
@@ -124,6 +129,8 @@ class SimNode(LifecycleNode):
         self._topic_pubs = dict(self._fixed_pubs)
         self._diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         self.awaiting_reset = set()  # parameters changed since the last build that need one
+        self._command_subs = {}  # the driven bodies' command subscriptions, (body, kind) -> subscription
+        self.commands = collections.Counter()  # (body, "taken" / "refused") -> commands
         self.internal_error = ""  # the last unexpected error a callback caught, until the next build
         self._logged = set()
         self._reset_lock = threading.Lock()
@@ -206,7 +213,44 @@ class SimNode(LifecycleNode):
         run = Run(scene, config, namespace=self.namespace, frame_id=values["frame_id"])
         run.set_cloud(fields=values["particle_fields"])
         self._make_publishers(run)
+        self._make_commands(run)
         return run
+
+    def _make_commands(self, run):
+        """For each driven body of the scene, ``~/bodies/<name>/cmd_pose`` (PoseStamped) and
+        ``~/bodies/<name>/cmd_twist`` (TwistStamped); the previous scene's go."""
+        for sub in self._command_subs.values():
+            self.destroy_subscription(sub)
+        self._command_subs = {}
+        for name in run.drivers:
+            for kind, msg_type in (("pose", PoseStamped), ("twist", TwistStamped)):
+                self._command_subs[(name, kind)] = self.create_subscription(
+                    msg_type, f"~/bodies/{name}/cmd_{kind}", functools.partial(self._command, name, kind), 10)
+
+    def _command(self, body: str, kind: str, msg):
+        """A driven body's command (drive.py), in the published axes and stamped in simulated time
+        (a zero stamp: now); a refusal is logged with its reason, at most once a second."""
+        try:
+            run = self.session.run
+            if run is None or body not in run.drivers:
+                return
+            dim, now = run.model.config.dim, run.solver.time
+            stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1.0e-9
+            stamp = now if stamp == 0.0 else stamp - run.time_origin_ns * 1.0e-9
+            if kind == "pose":
+                p, q = msg.pose.position, msg.pose.orientation
+                a, b = frames.scene_vector(dim, (p.x, p.y, p.z)), np.array([q.x, q.y, q.z, q.w])
+                if np.all(np.isfinite(b)) and abs(np.linalg.norm(b) - 1.0) <= QUATERNION_TOLERANCE:
+                    b = frames.scene_rotation(dim, quaternion_matrix(b / np.linalg.norm(b)))
+            else:
+                v, w = msg.twist.linear, msg.twist.angular
+                a, b = frames.scene_vector(dim, (v.x, v.y, v.z)), frames.scene_vector(dim, (w.x, w.y, w.z), axial=True)
+            taken, why = run.command(body, kind, stamp, a, b)
+            self.commands[(body, "taken" if taken else "refused")] += 1
+            if not taken or why != "taken":
+                self.get_logger().warning(f"~/bodies/{body}/cmd_{kind}: {why}", throttle_duration_sec=1.0)
+        except Exception as err:  # a command the layers below did not foresee: logged, never an exit
+            self._internal(f"~/bodies/{body}/cmd_{kind}", err)
 
     def _make_publishers(self, run):
         """One publisher per topic of the scene's outputs (found from the outputs at t = 0);
@@ -434,6 +478,8 @@ class SimNode(LifecycleNode):
             stats["internal_error"] = self.internal_error
         if self.awaiting_reset:
             message += f" ({', '.join(sorted(self.awaiting_reset))} changed: applies at the next ~/reset)"
+        for (body, outcome), count in sorted(self.commands.items()):  # a driven body's commands
+            stats[f"commands_{outcome}_{body}"] = count
         status = DiagnosticStatus(level=level, name=f"{self.get_name()}: solver", message=message,
                                   hardware_id=str(stats.get("device", self.value("device"))))
         status.values = [KeyValue(key=key, value=_text(value)) for key, value in stats.items()]

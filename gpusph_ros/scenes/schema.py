@@ -330,18 +330,29 @@ def _obstacles(items, tank, dim) -> list:
 
 
 MOTION_KEYS = {"sinusoid": ("type", "amplitude", "period", "phase_deg", "angle_deg", "axis", "centre"),
-               "move": ("type", "displacement", "duration", "start")}
+               "move": ("type", "displacement", "duration", "start"),
+               "driven": ("type", "max_speed", "max_acceleration", "max_angular_speed", "max_angular_acceleration",
+                          "timeout")}
+DRIVEN_TIMEOUT = 0.5  # [s] of simulated time a command is held before the body is brought to rest
 
 
 def _motion(where, value, obstacle, tank, dim) -> bodies.Motion:
     """An obstacle's prescribed motion (sph/bodies.py): a sinusoid of its displacement and of its
-    angle about an axis through ``centre`` (default the box's centre), or a move by
-    ``displacement`` over ``duration``; the box must stay in the tank over its translation."""
+    angle about an axis through ``centre`` (default the box's centre), a move by ``displacement``
+    over ``duration`` (the box must stay in the tank over either's translation), or driven by
+    commands (drive.py) within its limits: max_speed and max_acceleration (required, > 0), the
+    angular ones (default 0: it does not turn), and the timeout a command is held."""
     kind = value.get("type") if isinstance(value, dict) else None
     if kind not in bodies.LAWS:
         raise ConfigError(f"{where}.type", kind, "one of " + ", ".join(bodies.LAWS))
     keys = MOTION_KEYS[kind]
-    item = _mapping(where, value, keys, required=("type", "period") if kind == "sinusoid" else keys[:3])
+    item = _mapping(where, value, keys, required={"sinusoid": ("type", "period")}.get(kind, keys[:3]))
+    if kind == "driven":
+        limits = {key: _number(f"{where}.{key}", item.get(key, 0.0), lo=0.0, lo_open=key in keys[1:3])
+                  for key in keys[1:5]}
+        return bodies.Motion(law="driven", centre=obstacle.centre(dim), **limits,
+                             timeout=_number(f"{where}.timeout", item.get("timeout", DRIVEN_TIMEOUT), lo=0.0,
+                                             lo_open=True))
     if kind == "move":
         shift = _pad3(_vector(f"{where}.displacement", item["displacement"], dim))
         motion = bodies.Motion(law="move", centre=obstacle.centre(dim), amplitude=shift,

@@ -21,6 +21,11 @@ scene put the body:
   displacement D over the duration, starting and ending at rest with a continuous acceleration
   (the velocity 1 - cos(2 pi s) times D / duration), no rotation.
 
+A driven body follows segments its driver sets at each output (drive.py: commands from ROS, held
+to the scene's limits): from its pose and velocities at the segment's start t0, constant linear and
+angular accelerations, so that its velocity is continuous across outputs; until first driven it
+stands where the scene put it.
+
 A floating body (DualSPHysics' floatings, GPUSPH's floating bodies) integrates Newton's and Euler's
 laws for a rigid body in the solver's own predictor-corrector, from the force and torque the fluid
 exerts on its particles (the reaction the force pass leaves on each, F = sum m_i acc_i, T = sum
@@ -53,9 +58,9 @@ import warp as wp
 from . import health
 from .state import BOUNDARY, DT, T
 
-FIXED, SINUSOID, MOVE, FLOATING = 0, 1, 2, 3
-LAWS = ("sinusoid", "move")  # the scene's ``motion.type``
-LAW_ID = {"sinusoid": SINUSOID, "move": MOVE}
+FIXED, SINUSOID, MOVE, FLOATING, DRIVEN = 0, 1, 2, 3, 4
+LAWS = ("sinusoid", "move", "driven")  # the scene's ``motion.type``
+LAW_ID = {"sinusoid": SINUSOID, "move": MOVE, "driven": DRIVEN}
 
 
 @dataclass(frozen=True)
@@ -71,10 +76,19 @@ class Motion:
     axis: tuple = (0.0, 0.0, 1.0)  # the rotation's axis (normalised here)
     start: float = 0.0  # [s] move
     duration: float = 0.0  # [s] move
+    # driven: the limits its commands are held to (drive.py), [m/s], [m/s^2], [rad/s], [rad/s^2], and
+    # the time [s] a command is held before the body is brought to rest
+    max_speed: float = 0.0
+    max_acceleration: float = 0.0
+    max_angular_speed: float = 0.0
+    max_angular_acceleration: float = 0.0
+    timeout: float = 0.0
 
     def peak_speed(self, reach: float) -> float:
         """The largest speed [m/s] of a particle at most ``reach`` [m] from the centre: what the
         scene's check holds under c0 / 10."""
+        if self.law == "driven":
+            return self.max_speed + self.max_angular_speed * reach
         if self.law == "move":
             return 2.0 * float(np.linalg.norm(self.amplitude)) / self.duration
         omega = 2.0 * math.pi / self.period
@@ -138,6 +152,13 @@ def build(scalar):
         translate: wp.vec3d  # 1 where free, 0 where held
         rotate: wp.vec3d
         release: wp.float64
+        t0: wp.float64  # driven: the segment's start, pose, velocities and constant accelerations
+        x0: wp.vec3d
+        q0: wp.quatd
+        v0: wp.vec3d
+        w0: wp.vec3d
+        lin_acc: wp.vec3d
+        ang_acc: wp.vec3d
 
     @wp.struct
     class Rigid:
@@ -208,6 +229,20 @@ def build(scalar):
         pose.alpha = law.axis * (law.angle * f[2])
         return pose
 
+    @wp.func
+    def driven_pose(law: Law, t: wp.float64) -> Pose:
+        """A driven body on its segment (drive.py): constant accelerations from its pose and
+        velocities at t0, the rotation by the integrated angular velocity's vector."""
+        tau = wp.max(t - law.t0, wp.float64(0.0))
+        pose = Pose()
+        pose.x = law.x0 + law.v0 * tau + law.lin_acc * (wp.float64(0.5) * tau * tau)
+        pose.v = law.v0 + law.lin_acc * tau
+        pose.a = law.lin_acc
+        pose.w = law.w0 + law.ang_acc * tau
+        pose.alpha = law.ang_acc
+        pose.q = turned(law.q0, law.w0 + law.ang_acc * (wp.float64(0.5) * tau), tau)
+        return pose
+
     @wp.kernel(enable_backward=False, module="unique")
     def body_poses(laws: wp.array(dtype=Law), clock: wp.array(dtype=wp.float64), factor: wp.float64,
                    gravity: wp.vec3d, base: wp.array(dtype=Rigid), rates_at: wp.array(dtype=Rigid),
@@ -221,6 +256,9 @@ def build(scalar):
         t = clock[T] + factor * clock[DT]
         if law.kind == SINUSOID or law.kind == MOVE:
             poses[b] = prescribed_pose(law, t)
+            return
+        if law.kind == DRIVEN:
+            poses[b] = driven_pose(law, t)
             return
         if law.kind != FLOATING:
             return
@@ -314,6 +352,10 @@ def build(scalar):
 
     def laws(motions: list, device) -> wp.array:
         """The device table of ``motions`` by body id (None: fixed), at least one entry."""
+        return wp.array(law_list(motions), dtype=Law, device=device)
+
+    def law_list(motions: list) -> list:
+        """The Law of each of ``motions`` by body id (None: fixed), at least one."""
         table = []
         for m in motions or [None]:
             law = Law()
@@ -321,6 +363,7 @@ def build(scalar):
             law.axis, law.rotate, law.translate = wp.vec3d(0.0, 0.0, 1.0), wp.vec3d(0.0), wp.vec3d(0.0)
             law.mass = 1.0
             law.release = -1.0
+            law.q0 = wp.quatd(0.0, 0.0, 0.0, 1.0)
             if isinstance(m, Motion):
                 axis = np.asarray(m.axis, dtype=np.float64)
                 law.kind = LAW_ID[m.law]
@@ -329,6 +372,7 @@ def build(scalar):
                 law.phase, law.angle = m.phase, m.angle
                 law.axis = wp.vec3d(*(axis / np.linalg.norm(axis)))
                 law.start, law.duration = m.start, m.duration
+                law.x0 = law.centre  # a driven body stands where the scene put it until driven
             elif isinstance(m, Floating):
                 inertia = np.asarray(m.inertia, dtype=np.float64)
                 # a 2D body's only inertia is about z: the others are set to 1 and their axes held
@@ -341,7 +385,15 @@ def build(scalar):
                 law.translate = wp.vec3d(*(1.0 if f else 0.0 for f in m.translate))
                 law.rotate = wp.vec3d(*(1.0 if f else 0.0 for f in m.rotate))
             table.append(law)
-        return wp.array(table, dtype=Law, device=device)
+        return table
+
+    def segment(law, t0: float, position, quaternion, velocity, omega, acceleration, angular_acceleration):
+        """``law`` (a Law) on the segment from t0 (driven_pose), all in the scene's axes."""
+        law.t0 = t0
+        law.x0, law.q0 = wp.vec3d(*position), wp.quatd(*quaternion)
+        law.v0, law.w0 = wp.vec3d(*velocity), wp.vec3d(*omega)
+        law.lin_acc, law.ang_acc = wp.vec3d(*acceleration), wp.vec3d(*angular_acceleration)
+        return law
 
     def rigid_states(motions: list, device) -> wp.array:
         """Each body's floating state at t = 0: at its centre, at rest, unturned."""
@@ -358,4 +410,4 @@ def build(scalar):
 
     return SimpleNamespace(Law=Law, Rigid=Rigid, Pose=Pose, body_poses=body_poses, move_walls=move_walls,
                            wrench_sums=wrench_sums, commit_rigid=commit_rigid, work_on_fluid=work_on_fluid,
-                           laws=laws, rigid_states=rigid_states)
+                           laws=laws, law_list=law_list, segment=segment, rigid_states=rigid_states)

@@ -163,7 +163,8 @@ class Solver:
         self._floating = any(isinstance(m, bodies.Floating) for m in cfg.motions)
         if self._moving:
             B = bodies.build(s)
-            self._laws = B.laws(cfg.motions, dev)
+            self._law_list = B.law_list(cfg.motions)  # the host's copy, which drive() changes
+            self._laws = wp.array(self._law_list, dtype=B.Law, device=dev)
             self._rest = arr(np.asarray(particles.pos, dtype=np.float64), wp.vec3d)
             nb = len(cfg.motions)
             self._poses = wp.zeros(nb, dtype=B.Pose, device=dev)
@@ -333,6 +334,18 @@ class Solver:
             wp.launch(bodies.build(self.scalar).wrench_sums, dim=self.n,
                       inputs=[self._laws, self._poses, self.ptype, self.body, f.pos, self.mass, self.acc,
                               self._body_sums], device=self.device)
+
+    def drive(self, body: int, t0: float, position, quaternion, velocity, omega, acceleration,
+              angular_acceleration):
+        """Set driven body ``body``'s segment from t0 (bodies.driven_pose; the scene's axes, the
+        quaternion x, y, z, w): between two outputs, by the run's driver (drive.py). One small copy
+        to the device into the same table, which a captured step graph keeps reading."""
+        motion = self.config.motions[body] if 0 <= body < len(self.config.motions) else None
+        if not isinstance(motion, bodies.Motion) or motion.law != "driven":
+            raise ValueError(f"body {body} is not a driven body")
+        B = bodies.build(self.scalar)
+        B.segment(self._law_list[body], t0, position, quaternion, velocity, omega, acceleration, angular_acceleration)
+        wp.copy(self._laws, wp.array(self._law_list, dtype=B.Law, device="cpu"))
 
     def body_poses(self) -> list:
         """Each moving body's pose as of the last step (a host read: for outputs), by body id:
