@@ -287,6 +287,15 @@ def build(scalar):
         pose.alpha = wp.cw_mul(world_inertia_inv(law, body.q) * (torque - wp.cross(w, body.ang)), law.rotate)
         poses[b] = pose
 
+    @wp.func
+    def moving(laws: wp.array(dtype=Law), ptype: wp.array(dtype=wp.int32), body: wp.array(dtype=wp.int32),
+               i: int) -> bool:
+        """Whether particle i belongs to a body that moves."""
+        b = body[i]
+        if b < 0 or ptype[i] != BOUNDARY:
+            return False
+        return laws[b].kind != FIXED
+
     @wp.kernel(enable_backward=False, module="unique")
     def move_walls(laws: wp.array(dtype=Law), poses: wp.array(dtype=Pose), ptype: wp.array(dtype=wp.int32),
                    body: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32), rest: wp.array(dtype=wp.vec3d),
@@ -295,9 +304,7 @@ def build(scalar):
         acceleration; ``rest`` is in the caller's order."""
         i = wp.tid()
         b = body[i]
-        if b < 0 or ptype[i] != BOUNDARY:
-            return
-        if laws[b].kind == FIXED:
+        if not moving(laws, ptype, body, i):
             return
         pose = poses[b]
         arm = wp.quat_rotate(pose.q, rest[ids[i]] - laws[b].centre)
@@ -343,10 +350,7 @@ def build(scalar):
         v_w over their particles, a_w the fluid's force on w over m_w and v_w their velocity at the
         step's midpoint (the corrector's rates): the energy the fluid may gain (health.census_check)."""
         i = wp.tid()
-        b = body[i]
-        if b < 0 or ptype[i] != BOUNDARY:
-            return
-        if laws[b].kind == FIXED:
+        if not moving(laws, ptype, body, i):
             return
         wp.atomic_add(total, slot, -clock[DT] * wp.float64(mass[i] * wp.dot(acc[i], vel[i])))
 
