@@ -120,7 +120,8 @@ PYPI = {"rclpy": "ros-jazzy-rclpy[fastrtps]", "builtin_interfaces": "ros-jazzy-r
         "rosgraph_msgs": "ros-jazzy-rclpy[fastrtps]", "sensor_msgs": "ros-jazzy-common-interfaces",
         "geometry_msgs": "ros-jazzy-common-interfaces", "std_msgs": "ros-jazzy-common-interfaces",
         "std_srvs": "ros-jazzy-common-interfaces", "diagnostic_msgs": "ros-jazzy-common-interfaces",
-        "visualization_msgs": "ros-jazzy-common-interfaces", "python3-numpy": "numpy", "python3-yaml": "PyYAML",
+        "visualization_msgs": "ros-jazzy-common-interfaces", "nav_msgs": "ros-jazzy-common-interfaces",
+        "python3-numpy": "numpy", "python3-yaml": "PyYAML",
         "python3-matplotlib": "matplotlib", "python3-tqdm": "tqdm", "tf2_msgs": None, "ament_index_python": None,
         "launch": None, "launch_ros": None, "launch_xml": None, "rviz2": None}
 
