@@ -334,8 +334,8 @@ def test_fixed_bodies_go_on_tf_static_and_moving_ones_on_tf(monkeypatch):
     static = markers.body_transforms(scene, "world")
     assert [tf.child_frame_id for tf in static.transforms] == ["world/step"]
     theta = 0.1
-    pose = {"position": np.array([0.07, 0.0, 0.0]),
-            "quaternion": np.array([0.0, 0.0, math.sin(theta / 2), math.cos(theta / 2)])}
+    pose = {"position": np.array([0.07, 0.0, 0.0]), "rotation": quat_matrix([0.0, 0.0, math.sin(theta / 2),
+                                                                           math.cos(theta / 2)])}
     moving = markers.body_transforms(scene, "world", 0.5, {"paddle": pose})
     (tf,) = moving.transforms
     r = tf.transform.rotation

@@ -17,10 +17,11 @@ ALLOWED = {
     "scenes": {"sph", "theory", "share"},
     "measure": {"sph"},
     "output": set(),
-    "runner": {"sph", "scenes", "measure", "output"},
+    "drive": set(),  # a driven body's commands into segments: the run's, fed by the node
+    "runner": {"sph", "scenes", "measure", "output", "drive"},
     "plan": {"sph", "scenes"},
     "analysis": {"output", "share", "theory"},
-    "ros": {"gpusph_ros", "sph", "scenes", "measure", "output", "runner", "share"},
+    "ros": {"gpusph_ros", "sph", "scenes", "measure", "output", "runner", "share", "drive"},
     "study": {"sph", "scenes", "runner", "analysis", "theory", "share", "output", "measure"},
     "cli": None,  # the entry point may use anything
 }

@@ -99,8 +99,8 @@ class Measurements:
         "gauges": {name: elevation}, "sensors": {name: wall pressure}, "columns": {name: {vel, count}},
         "wrenches": {name: (force, torque)}, "pressure_loads": {name: (force, torque) from the wall
         pressure}, "blocks": {name: {offset: (fx, upstream, downstream)}}, "poses": {name: a moving
-        body's pose (Solver.body_poses)}}. A moving body's wrench is in its own axes about its
-        reference point."""
+        body's pose (Solver.body_poses) and its rotation matrix, "rotation"}}. A moving body's wrench
+        is in its own axes about its reference point."""
         out = {"points": {}, "profiles": {}, "gauges": {}, "sensors": {}, "columns": {}, "wrenches": {},
                "pressure_loads": {}, "blocks": {}, "poses": {}}
         up = self.scene.dim - 1
@@ -135,9 +135,9 @@ class Measurements:
         if self._moving:
             poses = self.solver.body_poses()
             for name, (body, centre) in self._moving.items():
-                pose = out["poses"][name] = poses[body]
+                pose = out["poses"][name] = {**poses[body], "rotation": quaternion_matrix(poses[body]["quaternion"])}
                 force, torque = out["wrenches"][name]
-                turn = quaternion_matrix(pose["quaternion"]).T
+                turn = pose["rotation"].T
                 about = torque - np.cross(pose["position"] - centre, force)
                 out["wrenches"][name] = (turn @ force, turn @ about)
         for name, blocks in self._blocks.items():

@@ -10,7 +10,6 @@ from geometry_msgs.msg import Point
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
-from ..sph.bodies import quaternion_matrix
 from . import frames
 from .messages import stamp
 
@@ -122,9 +121,9 @@ def force_arrows(t: float, wrenches: dict, scene, scales: dict, frame_id: str) -
 def body_transforms(scene, frame_id: str, t: float = 0.0, poses: "dict | None" = None):
     """The body frames (``frames.body_frame``) as a tf2_msgs/TFMessage, or None where tf2_msgs is
     not installed (PyPI has no wheel of it; every ROS 2 install has it) or no body is listed:
-    without ``poses`` the fixed bodies' for /tf_static, each at its box's centre; with them
-    ({name: Solver.body_poses' pose}) the moving bodies' for /tf, each where it stands and turned
-    as it is."""
+    without ``poses`` the fixed bodies' for /tf_static, each at its box's centre; with them ({name:
+    a measurement sample's pose, with its rotation matrix}) the moving bodies' for /tf, each where
+    it stands and turned as it is."""
     try:
         from geometry_msgs.msg import TransformStamped
         from tf2_msgs.msg import TFMessage
@@ -139,7 +138,7 @@ def body_transforms(scene, frame_id: str, t: float = 0.0, poses: "dict | None" =
         where, turned = o.centre(scene.dim), (0.0, 0.0, 0.0, 1.0)
         if poses is not None:
             where = poses[o.name]["position"]
-            turned = frames.published_rotation(scene.dim, quaternion_matrix(poses[o.name]["quaternion"]))
+            turned = frames.published_rotation(scene.dim, poses[o.name]["rotation"])
         x, y, z = frames.published(scene.dim, where)
         tf.transform.translation.x, tf.transform.translation.y, tf.transform.translation.z = x, y, z
         r = tf.transform.rotation

@@ -13,7 +13,6 @@ from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import FluidPressure, PointCloud2, PointField
 
-from ..sph.bodies import quaternion_matrix
 from . import frames
 
 
@@ -108,9 +107,9 @@ def point(t, values, frame_id="world") -> PointStamped:
 
 def body_motion(t, pose: dict, dim: int, frame_id: str, child: str) -> tuple:
     """A moving body's pose (PoseStamped in the world frame) and odometry (Odometry: the pose, and
-    the twist in the body's own frame, ``child``), in the published axes, from a pose of
-    ``Solver.body_poses``."""
-    rotation = quaternion_matrix(pose["quaternion"])
+    the twist in the body's own frame, ``child``), in the published axes, from a pose of a
+    measurement sample (``measure.suite``: position, rotation matrix, velocity, omega)."""
+    rotation = pose["rotation"]
     position = frames.published(dim, pose["position"])
     q = frames.published_rotation(dim, rotation)
     stamped = _header(PoseStamped(), t, frame_id)
