@@ -342,3 +342,41 @@ def test_fixed_bodies_go_on_tf_static_and_moving_ones_on_tf(monkeypatch):
     assert tf.child_frame_id == "world/paddle" and tf.header.frame_id == "world"
     assert [r.x, r.y, r.z, r.w] == pytest.approx([0.0, -math.sin(theta / 2), 0.0, math.cos(theta / 2)])
     assert tf.transform.translation.x == pytest.approx(0.07) and tf.transform.translation.z == 0.0
+
+
+@pytest.mark.unit
+def test_linear_wavemaker_theory_has_its_limits_and_its_dispersion():
+    """Biesel's H/S: a piston's tends to kh in shallow water and 2 in deep water, a flap's to kh/2 and
+    2 (Dean & Dalrymple 1991, Fig. 6.4); the wavenumber satisfies omega^2 = g k tanh(kh)."""
+    from gpusph_ros.theory import wavemaker
+
+    assert wavemaker.piston_ratio(1e-3) == pytest.approx(1e-3, rel=1e-3)
+    assert wavemaker.flap_ratio(1e-3) == pytest.approx(5e-4, rel=1e-3)
+    assert wavemaker.piston_ratio(20.0) == pytest.approx(2.0, rel=1e-6)
+    assert wavemaker.flap_ratio(20.0) == pytest.approx(2.0, rel=0.1)  # 2 (1 - 1/kh)
+    for period, depth in ((1.0, 0.4), (2.0, 0.4), (8.0, 10.0)):
+        k = wavemaker.wavenumber(period, depth)
+        assert (2 * math.pi / period) ** 2 == pytest.approx(9.81 * k * math.tanh(k * depth), rel=1e-12)
+
+
+@pytest.mark.physics
+def test_a_piston_wavemakers_stroke_is_biesels_and_its_amplitude_ramps_in():
+    """A piston asked for 3 cm waves of 1 s in 0.3 m of water (kh = 1.373, H/S = 1.299): its
+    amplitude is S/2 = 11.5 mm; over its two-period ramp its particles stand at (1 - cos(pi t / 2)) / 2
+    x S/2 sin(2 pi t) from where they started, then at S/2 sin(2 pi t), to float32's round-off."""
+    from gpusph_ros.theory import wavemaker
+
+    law = {"type": "piston", "wave_height": 0.03, "period": 1.0}
+    model = build(parse_scene(piston_tank(law, depth=0.3)), dx=DX)
+    motion = model.config.motions[0]
+    kh = wavemaker.wavenumber(1.0, 0.3) * 0.3
+    assert motion.amplitude[0] == pytest.approx(0.03 / wavemaker.piston_ratio(kh) / 2) and motion.ramp == 2.0
+    solver = Solver(model.config, model.particles)
+    paddle = model.particles.body == 0
+    x0 = model.particles.pos[paddle, 0]
+    for t in (0.3, 1.1, 2.6):
+        solver.advance(t)
+        t = solver.time
+        ramp = 0.5 * (1 - math.cos(math.pi * t / 2.0)) if t < 2.0 else 1.0
+        shift = ramp * motion.amplitude[0] * math.sin(2 * math.pi * t)
+        assert np.abs(solver.snapshot()["pos"][paddle, 0] - (x0 + shift)).max() < 1e-6

@@ -25,6 +25,7 @@ import yaml
 from ..share import config_dir
 from ..sph import bodies
 from ..sph.config import ConfigError, unknown_key
+from ..theory import wavemaker
 from . import yaml_input
 from .boxes import WALL_KINDS, wall_faces
 
@@ -294,7 +295,7 @@ def _walls(walls_in, dim) -> dict:
     return walls
 
 
-def _obstacles(items, tank, dim) -> list:
+def _obstacles(items, tank, dim, depth: float = 0.0, g: float = 9.81) -> list:
     """Solid boxes standing on the floor, each with its pressure-block offsets."""
     up = dim - 1
     obstacles = []
@@ -321,7 +322,7 @@ def _obstacles(items, tank, dim) -> list:
         if item.get("motion") is not None and item.get("floating") is not None:
             raise ConfigError(where, name, "one of motion (prescribed) and floating (moved by the fluid), not both")
         if item.get("motion") is not None:
-            obstacle.motion = _motion(f"{where}.motion", item["motion"], obstacle, tank, dim)
+            obstacle.motion = _motion(f"{where}.motion", item["motion"], obstacle, tank, dim, depth, g)
         if item.get("floating") is not None:
             obstacle.motion = _floating(f"{where}.floating", item["floating"], obstacle, dim)
         obstacles.append(obstacle)
@@ -332,11 +333,35 @@ def _obstacles(items, tank, dim) -> list:
 MOTION_KEYS = {"sinusoid": ("type", "amplitude", "period", "phase_deg", "angle_deg", "axis", "centre"),
                "move": ("type", "displacement", "duration", "start"),
                "driven": ("type", "max_speed", "max_acceleration", "max_angular_speed", "max_angular_acceleration",
-                          "timeout")}
+                          "timeout"),
+               "piston": ("type", "wave_height", "period", "ramp", "depth"),
+               "flap": ("type", "wave_height", "period", "ramp", "depth")}
 DRIVEN_TIMEOUT = 0.5  # [s] of simulated time a command is held before the body is brought to rest
 
 
-def _motion(where, value, obstacle, tank, dim) -> bodies.Motion:
+def _wavemaker(where, item, kind, obstacle, dim, depth, g) -> bodies.Motion:
+    """A piston or a flap hinged at the bed making waves of ``wave_height`` and ``period`` in water
+    ``depth`` deep (default the scene's): its stroke from linear wavemaker theory
+    (theory/wavemaker.py), its amplitude ramped in over ``ramp`` seconds (default two periods)."""
+    height = _number(f"{where}.wave_height", item["wave_height"], lo=0.0, lo_open=True)
+    period = _number(f"{where}.period", item["period"], lo=0.0, lo_open=True)
+    h = _number(f"{where}.depth", item.get("depth", depth), lo=0.0, lo_open=True)
+    kh = wavemaker.wavenumber(period, h, g) * h
+    ramp = _number(f"{where}.ramp", item.get("ramp", 2.0 * period), lo=0.0)
+    if kind == "piston":
+        stroke = height / wavemaker.piston_ratio(kh)
+        return bodies.Motion(law="sinusoid", centre=obstacle.centre(dim), amplitude=(stroke / 2.0, 0.0, 0.0),
+                             period=period, ramp=ramp)
+    stroke = height / wavemaker.flap_ratio(kh)  # at the still water level, h above the hinge
+    hinge = (0.5 * (obstacle.lo[0] + obstacle.hi[0]), 0.0, 0.0) if dim == 2 else \
+        (0.5 * (obstacle.lo[0] + obstacle.hi[0]), 0.5 * (obstacle.lo[1] + obstacle.hi[1]), 0.0)
+    axis = (0.0, 0.0, 1.0) if dim == 2 else (0.0, 1.0, 0.0)
+    sign = -1.0 if dim == 2 else 1.0  # the top towards +x: about -z in the x-y plane, +y in 3D
+    return bodies.Motion(law="sinusoid", centre=hinge, angle=sign * math.atan(stroke / (2.0 * h)), axis=axis,
+                         period=period, ramp=ramp)
+
+
+def _motion(where, value, obstacle, tank, dim, depth: float = 0.0, g: float = 9.81) -> bodies.Motion:
     """An obstacle's prescribed motion (sph/bodies.py): a sinusoid of its displacement and of its
     angle about an axis through ``centre`` (default the box's centre), a move by ``displacement``
     over ``duration`` (the box must stay in the tank over either's translation), or driven by
@@ -347,6 +372,10 @@ def _motion(where, value, obstacle, tank, dim) -> bodies.Motion:
         raise ConfigError(f"{where}.type", kind, "one of " + ", ".join(bodies.LAWS))
     keys = MOTION_KEYS[kind]
     item = _mapping(where, value, keys, required={"sinusoid": ("type", "period")}.get(kind, keys[:3]))
+    if kind in ("piston", "flap"):
+        if obstacle.lo[dim - 1] > 0.0:
+            raise ConfigError(f"{where}.type", kind, "a paddle standing on the floor")
+        return _wavemaker(where, item, kind, obstacle, dim, depth, g)
     if kind == "driven":
         limits = {key: _number(f"{where}.{key}", item.get(key, 0.0), lo=0.0, lo_open=key in keys[1:3])
                   for key in keys[1:5]}
@@ -592,7 +621,7 @@ def parse_scene(data, default_name: str = "scene") -> Scene:
     depth = _number("depth", data.get("depth", surface), lo=0.0, hi=tank[up], lo_open=True)
     wet_bed = _number("wet_bed", data.get("wet_bed", 0.0), lo=0.0, hi=tank[up])
 
-    obstacles = _obstacles(data.get("obstacles") or [], tank, dim)
+    obstacles = _obstacles(data.get("obstacles") or [], tank, dim, depth, math.hypot(*gravity))
     refine = _zones(data.get("refine") or [], tank, dim, obstacles)
     probes = _probes(data.get("probes") or {}, tank, dim)
 

@@ -16,7 +16,9 @@ scene put the body:
 
 - ``sinusoid``: d = A [sin(omega t + phi) - sin(phi)] and theta = Theta [sin(omega t + phi) -
   sin(phi)], omega = 2 pi / period: a piston (A along the flume) or a flap (Theta about its hinge);
-  phi = -90 degrees starts it at rest;
+  phi = -90 degrees starts it at rest; with a ``ramp``, both times (1 - cos(pi t / ramp)) / 2 until
+  then (a wavemaker's start: the scene's ``piston`` and ``flap`` are such sinusoids, their stroke
+  from linear wavemaker theory, theory/wavemaker.py);
 - ``move``: d = D [s - sin(2 pi s) / (2 pi)], s = (t - start) / duration clamped to [0, 1]: the
   displacement D over the duration, starting and ending at rest with a continuous acceleration
   (the velocity 1 - cos(2 pi s) times D / duration), no rotation.
@@ -59,7 +61,7 @@ from . import health
 from .state import BOUNDARY, DT, T
 
 FIXED, SINUSOID, MOVE, FLOATING, DRIVEN = 0, 1, 2, 3, 4
-LAWS = ("sinusoid", "move", "driven")  # the scene's ``motion.type``
+LAWS = ("sinusoid", "move", "driven", "piston", "flap")  # the scene's ``motion.type`` (piston, flap: a sinusoid)
 LAW_ID = {"sinusoid": SINUSOID, "move": MOVE, "driven": DRIVEN}
 
 
@@ -76,6 +78,7 @@ class Motion:
     axis: tuple = (0.0, 0.0, 1.0)  # the rotation's axis (normalised here)
     start: float = 0.0  # [s] move
     duration: float = 0.0  # [s] move
+    ramp: float = 0.0  # [s] sinusoid: its amplitude grows from 0 over this time (1 - cos); 0: none
     # driven: the limits its commands are held to (drive.py), [m/s], [m/s^2], [rad/s], [rad/s^2], and
     # the time [s] a command is held before the body is brought to rest
     max_speed: float = 0.0
@@ -146,6 +149,7 @@ def build(scalar):
         axis: wp.vec3d
         start: wp.float64
         duration: wp.float64
+        ramp: wp.float64
         mass: wp.float64  # floating: M, the body frame's inertia, the free axes, the release time
         inertia: wp.mat33d
         inv_inertia: wp.mat33d
@@ -186,7 +190,15 @@ def build(scalar):
         if law.kind == SINUSOID:
             s = wp.sin(law.omega * t + law.phase)
             c = wp.cos(law.omega * t + law.phase)
-            return wp.vec3d(s - wp.sin(law.phase), law.omega * c, -law.omega * law.omega * s)
+            f = wp.vec3d(s - wp.sin(law.phase), law.omega * c, -law.omega * law.omega * s)
+            if t >= law.ramp:
+                return f
+            # times the ramp r = (1 - cos(pi t / ramp)) / 2: (r f)' = r' f + r f', (r f)'' = r'' f + 2 r' f' + r f''
+            a = wp.float64(math.pi) / law.ramp
+            r = wp.float64(0.5) * (wp.float64(1.0) - wp.cos(a * t))
+            dr = wp.float64(0.5) * a * wp.sin(a * t)
+            ddr = wp.float64(0.5) * a * a * wp.cos(a * t)
+            return wp.vec3d(r * f[0], dr * f[0] + r * f[1], ddr * f[0] + wp.float64(2.0) * dr * f[1] + r * f[2])
         if law.kind == MOVE:
             u = (t - law.start) / law.duration
             if u <= wp.float64(0.0):
@@ -375,7 +387,7 @@ def build(scalar):
                 law.omega = 2.0 * math.pi / m.period if m.law == "sinusoid" else 0.0
                 law.phase, law.angle = m.phase, m.angle
                 law.axis = wp.vec3d(*(axis / np.linalg.norm(axis)))
-                law.start, law.duration = m.start, m.duration
+                law.start, law.duration, law.ramp = m.start, m.duration, m.ramp
                 law.x0 = law.centre  # a driven body stands where the scene put it until driven
             elif isinstance(m, Floating):
                 inertia = np.asarray(m.inertia, dtype=np.float64)
