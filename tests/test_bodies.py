@@ -380,3 +380,24 @@ def test_a_piston_wavemakers_stroke_is_biesels_and_its_amplitude_ramps_in():
         ramp = 0.5 * (1 - math.cos(math.pi * t / 2.0)) if t < 2.0 else 1.0
         shift = ramp * motion.amplitude[0] * math.sin(2 * math.pi * t)
         assert np.abs(solver.snapshot()["pos"][paddle, 0] - (x0 + shift)).max() < 1e-6
+
+
+@pytest.mark.physics
+def test_a_box_that_sinks_comes_to_rest_on_the_floor_not_through_it():
+    """A 2D box of density 2000 kg/m^3 let go in 0.3 m of water sinks (its weight twice its
+    buoyancy) and stops on the tank's floor (bodies.wall_contact): its bottom never below the floor's
+    face, at rest there by 1.5 s, no fluid lost."""
+    scene = {"name": "sink", "dim": 2, "tank": [1.0, 0.6],
+             "fluid": [{"name": "water", "lo": [0, 0], "hi": [1.0, 0.3]}],
+             "obstacles": [{"name": "stone", "lo": [0.45, 0.15], "hi": [0.55, 0.2], "displaces_fluid": True,
+                            "floating": {"density": 2000.0, "rotate": False}}]}
+    model = build(parse_scene(scene), dx=DX)
+    solver = Solver(model.config, model.particles)
+    bottoms = []
+    for t in np.arange(0.1, 1.5 + 1e-9, 0.1):
+        solver.advance(float(t))
+        body = solver.body_states()[0]
+        bottoms.append(body["position"][1] - 0.025)
+    assert min(bottoms) >= -1e-9 and bottoms[-1] == pytest.approx(0.0, abs=1e-9)
+    assert abs(body["velocity"][1]) < 1e-9
+    assert solver.excluded_particles == 0

@@ -465,7 +465,9 @@ def _floating(where, value, obstacle, dim) -> bodies.Floating:
         _vector(f"{where}.omega", item.get("omega", [0.0] * 3), 3)
     return bodies.Floating(mass=mass, centre=com, inertia=inertia, translate=translate, rotate=rotate,
                            release=_number(f"{where}.release", item.get("release", 0.0), lo=0.0),
-                           velocity=velocity, omega=omega)
+                           velocity=velocity, omega=omega,
+                           corner_lo=tuple(a - c for a, c in zip(obstacle.lo, com)),
+                           corner_hi=tuple(b - c for b, c in zip(obstacle.hi, com)))
 
 
 def _zones(items, tank, dim, obstacles) -> list:

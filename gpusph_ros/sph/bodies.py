@@ -41,7 +41,10 @@ L to round-off. Each stage is the fluid's: the predictor advances by dt / 2 with
 velocities at t, the corrector by dt from t with those at t + dt / 2 (the rotation by the angle
 omega dt about omega, as a quaternion). Constrained degrees of freedom have their force and torque
 zeroed (and their angular velocity: a 2D body turns about z only). Until its ``release`` time a
-floating body is held where it stands.
+floating body is held where it stands. It meets the tank's walls (``wall_contact``): a corner of its
+box past a wall's face moves it back and takes its velocity into the wall away, a plastic contact
+without friction (DualSPHysics hands contacts to Project Chrono; this is the least that keeps a body
+that sinks or drifts inside the tank); bodies do not meet each other, nor fixed obstacles, yet.
 
 The solver sets the bodies' poses at each stage of a step (the step's start, the half step, the
 candidate: ``body_poses``) and each body's particles on them (``move_walls``), with their velocity
@@ -112,6 +115,9 @@ class Floating:
     release: float = 0.0
     velocity: tuple = (0.0, 0.0, 0.0)  # [m/s] at t = 0 (once released)
     omega: tuple = (0.0, 0.0, 0.0)  # [rad/s] at t = 0
+    # its box's corners less the centre of mass at t = 0 [m]: what meets the tank's walls
+    corner_lo: tuple = (0.0, 0.0, 0.0)
+    corner_hi: tuple = (0.0, 0.0, 0.0)
 
 
 def quaternion_matrix(q) -> np.ndarray:
@@ -156,6 +162,8 @@ def build(scalar):
         translate: wp.vec3d  # 1 where free, 0 where held
         rotate: wp.vec3d
         release: wp.float64
+        corner_lo: wp.vec3d  # floating: its box's corners less c0
+        corner_hi: wp.vec3d
         t0: wp.float64  # driven: the segment's start, pose, velocities and constant accelerations
         x0: wp.vec3d
         q0: wp.quatd
@@ -255,10 +263,35 @@ def build(scalar):
         pose.q = turned(law.q0, law.w0 + law.ang_acc * (wp.float64(0.5) * tau), tau)
         return pose
 
+    @wp.func
+    def wall_contact(law: Law, body: Rigid, wall_lo: wp.vec3d, wall_hi: wp.vec3d) -> Rigid:
+        """The body kept inside the tank's walls [wall_lo, wall_hi]: where a corner of its box has
+        passed a wall's face it is moved back along that axis and its velocity into the wall is
+        taken away (a plastic contact without friction; its rotation is left as it is)."""
+        low = wp.vec3d(wp.float64(1.0e300), wp.float64(1.0e300), wp.float64(1.0e300))
+        high = -low
+        for k in range(8):
+            corner = wp.vec3d(wp.where(k % 2 == 0, law.corner_lo[0], law.corner_hi[0]),
+                              wp.where((k // 2) % 2 == 0, law.corner_lo[1], law.corner_hi[1]),
+                              wp.where(k // 4 == 0, law.corner_lo[2], law.corner_hi[2]))
+            p = body.x + wp.quat_rotate(body.q, corner)
+            low = wp.min(low, p)
+            high = wp.max(high, p)
+        shift = wp.max(wall_lo - low, wp.vec3d(wp.float64(0.0))) - wp.max(high - wall_hi, wp.vec3d(wp.float64(0.0)))
+        v = body.v
+        for ax in range(3):
+            if (shift[ax] > wp.float64(0.0) and v[ax] < wp.float64(0.0)) or \
+                    (shift[ax] < wp.float64(0.0) and v[ax] > wp.float64(0.0)):
+                v[ax] = wp.float64(0.0)
+        body.x = body.x + shift
+        body.v = v
+        return body
+
     @wp.kernel(enable_backward=False, module="unique")
     def body_poses(laws: wp.array(dtype=Law), clock: wp.array(dtype=wp.float64), factor: wp.float64,
-                   gravity: wp.vec3d, base: wp.array(dtype=Rigid), rates_at: wp.array(dtype=Rigid),
-                   sums: wp.array2d(dtype=wp.vec3d), out: wp.array(dtype=Rigid), poses: wp.array(dtype=Pose)):
+                   gravity: wp.vec3d, wall_lo: wp.vec3d, wall_hi: wp.vec3d, base: wp.array(dtype=Rigid),
+                   rates_at: wp.array(dtype=Rigid), sums: wp.array2d(dtype=wp.vec3d), out: wp.array(dtype=Rigid),
+                   poses: wp.array(dtype=Pose)):
         """Each body's pose at t + factor dt: a prescribed body's from its law; a floating body's
         state advanced from ``base`` by factor dt with the velocities of ``rates_at`` and the last
         force evaluation's force and torque (sums[b, 0], sums[b, 1]) into ``out`` (factor 0: base
@@ -287,6 +320,7 @@ def build(scalar):
             body.v = body.v + force * (dt / law.mass)
             body.q = turned(body.q, angular_velocity(law, at), dt)
             body.ang = body.ang + torque * dt
+            body = wall_contact(law, body, wall_lo, wall_hi)
         out[b] = body
         w = angular_velocity(law, body)
         pose = Pose()
@@ -398,6 +432,7 @@ def build(scalar):
                 law.centre = wp.vec3d(*m.centre)
                 law.mass, law.release = m.mass, m.release
                 law.inertia, law.inv_inertia = wp.mat33d(*inertia.ravel()), wp.mat33d(*inverse.ravel())
+                law.corner_lo, law.corner_hi = wp.vec3d(*m.corner_lo), wp.vec3d(*m.corner_hi)
                 law.translate = wp.vec3d(*(1.0 if f else 0.0 for f in m.translate))
                 law.rotate = wp.vec3d(*(1.0 if f else 0.0 for f in m.rotate))
             table.append(law)

@@ -173,6 +173,7 @@ class Solver:
             self._rigid, self._rigid_h, self._rigid_c = (B.rigid_states(cfg.motions, dev) for _ in range(3))
             self._body_sums = wp.zeros((nb, 2), dtype=wp.vec3d, device=dev)
             self._gravity64 = wp.vec3d(*cfg.gravity)
+            self._walls64 = (wp.vec3d(*cfg.wall_lo), wp.vec3d(*cfg.wall_hi))
         self.fields = self._make_fields(self.pos, self.vel, self.rho, shared)
         self._fields_h = self._make_fields(self._pos_h, self._vel_h, self._rho_h, shared)
         self._fields_c = self._make_fields(self._pos_c, self._vel_c, self._rho_c, shared)
@@ -322,8 +323,8 @@ class Solver:
         base, rates_at, out = [(self._rigid, self._rigid, self._rigid), (self._rigid, self._rigid, self._rigid_h),
                                (self._rigid, self._rigid_h, self._rigid_c)][into]
         wp.launch(B.body_poses, dim=len(self.config.motions),
-                  inputs=[self._laws, self._clock, factor, self._gravity64, base, rates_at, self._body_sums, out,
-                          self._poses], device=dev)
+                  inputs=[self._laws, self._clock, factor, self._gravity64, self._walls64[0], self._walls64[1], base,
+                          rates_at, self._body_sums, out, self._poses], device=dev)
         wp.launch(B.move_walls, dim=self.n, inputs=[self._laws, self._poses, self.ptype, self.body, self.ids,
                                                     self._rest, pos, vel, self.wall_acc], device=dev)
 
