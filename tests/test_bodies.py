@@ -1,6 +1,7 @@
 """Bodies that move on a prescribed path (sph/bodies.py; issue 45): their particles on the law, the
 fluid a piston displaces, and the scene's checks of a motion."""
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -313,6 +314,16 @@ def test_a_moving_bodys_pose_odometry_and_wrench_are_published_and_recorded(tmp_
         pytest.approx([0.6, 0.0, 0.31])
     force = rec.topic("bodies/box/wrench")["force"][-1]
     assert force[1] == 0.0 and force[2] > 0.0  # the fluid holds the box up (published z)
+    # gpusph-analyze: each moving body's motion as metrics and a chart
+    from gpusph_ros.analysis.report import analyse, charts
+
+    report, curves = analyse(tmp_path / "bag", rec=rec)
+    rows = {m["key"]: m["value"] for m in report["metrics"]}
+    assert rows["paddle_rotation"] == pytest.approx(4.0 * (1 + math.sin(0.1 * math.pi)), abs=1e-4)  # at 0.3 s
+    assert rows["paddle_displacement"] == pytest.approx(0.0, abs=1e-9)  # about its hinge
+    assert rows["box_peak_force"] > 0.0
+    written = charts(report, curves, tmp_path / "charts")
+    assert {Path(w).name for w in written} >= {"body_paddle.png", "body_box.png"}
 
 
 @pytest.mark.unit
@@ -342,6 +353,10 @@ def test_fixed_bodies_go_on_tf_static_and_moving_ones_on_tf(monkeypatch):
     assert tf.child_frame_id == "world/paddle" and tf.header.frame_id == "world"
     assert [r.x, r.y, r.z, r.w] == pytest.approx([0.0, -math.sin(theta / 2), 0.0, math.cos(theta / 2)])
     assert tf.transform.translation.x == pytest.approx(0.07) and tf.transform.translation.z == 0.0
+    # the geometry draws the paddle in its own frame, its box's centre 0.3 m above the hinge
+    boxes = [m for m in markers.geometry(scene, DX, "world").markers if m.ns == "obstacles"]
+    assert [b.header.frame_id for b in boxes] == ["world/paddle", "world"]
+    assert (boxes[0].pose.position.x, boxes[0].pose.position.z) == pytest.approx((0.0, 0.3))
 
 
 @pytest.mark.unit

@@ -299,8 +299,42 @@ def analyse(path, data=None, rec=None) -> tuple:
         except KeyError as err:  # a probe the comparison reads is not in the scene
             raise KeyError(f"analysis {case['case']} (the scene's analysis section): {err.args[0]}") from None
         report.update(extra)
-    report["metrics"] = rows
+    motion_rows, curves["bodies"] = body_motions(rec)
+    report["metrics"] = rows + motion_rows
     return report, curves
+
+
+def rotation_vectors(q: np.ndarray) -> np.ndarray:
+    """Each unit quaternion (x, y, z, w) as its rotation vector (axis times angle [rad], the
+    shorter way)."""
+    q = np.where(q[:, 3:4] < 0.0, -q, q)
+    s = np.linalg.norm(q[:, :3], axis=1)
+    angle = 2.0 * np.arctan2(s, q[:, 3])
+    return q[:, :3] * np.where(s > 0.0, angle / np.where(s > 0.0, s, 1.0), 0.0)[:, None]
+
+
+def body_motions(rec) -> tuple:
+    """Each moving body the recording has odometry of (~/bodies/<name>/odom): its largest
+    displacement from where it started, largest rotation, and the peak of its wrench's force, as
+    metric rows; and its curves {name: (t, position, rotation vector, (t, force))}."""
+    rows, curves = [], {}
+    for topic in sorted(t for t in rec.series if t.endswith("/odom") and "/bodies/" in t):
+        name = topic.split("/bodies/", 1)[1].rsplit("/odom", 1)[0]
+        odom = rec.series[topic]
+        position, turn = odom["position"], rotation_vectors(odom["orientation"])
+        shift = float(np.linalg.norm(position - position[0], axis=1).max())
+        rows.append({**_metric(f"{name}_displacement", shift), "label": f"{name}: largest distance from its start",
+                     "unit": "m"})
+        rows.append({**_metric(f"{name}_rotation", float(np.degrees(np.linalg.norm(turn, axis=1).max()))),
+                     "label": f"{name}: largest rotation from its start", "unit": "deg"})
+        force = (odom["t"], np.zeros((len(odom["t"]), 3)))
+        wrench = topic.rsplit("/odom", 1)[0] + "/wrench"
+        if wrench in rec.series:
+            force = (rec.series[wrench]["t"], rec.series[wrench]["force"])
+            rows.append({**_metric(f"{name}_peak_force", float(np.linalg.norm(force[1], axis=1).max())),
+                         "label": f"{name}: peak force of the fluid on it (its axes)", "unit": "N"})
+        curves[name] = (odom["t"], position, turn, force)
+    return rows, curves
 
 
 def excluded_line(result: dict) -> str:
@@ -403,6 +437,18 @@ def charts(report, curves, out_dir) -> list:
         plt.close(fig)
         written.append(str(out_dir / name))
 
+    for name, (t, position, turn, (tf, force)) in curves.get("bodies", {}).items():
+        fig, axes = plt.subplots(3, 1, figsize=(7, 7), sharex=True)
+        for k, axis in enumerate("xyz"):
+            axes[0].plot(t, position[:, k], label=axis)
+            axes[1].plot(t, np.degrees(turn[:, k]), label=axis)
+            axes[2].plot(tf, force[:, k], label=axis)
+        axes[0].set(ylabel="position [m]", title=f"Body {name}: pose (world, z up) and force (its axes)\n{title}")
+        axes[1].set(ylabel="rotation vector [deg]")
+        axes[2].set(xlabel="time [s]", ylabel="force on it [N]")
+        for ax in axes:
+            ax.legend(loc="upper right", fontsize=7)
+        save(fig, f"body_{name}.png")
     if "velocity" in curves:
         t, u, exp = curves["velocity"]
         fig, ax = plt.subplots(figsize=(7, 4))

@@ -58,13 +58,17 @@ def geometry(scene, dx: float, frame_id: str, t: float = 0.0) -> MarkerArray:
     out.append(tank)
     size = max(scene.tank) / 40  # the height of the labels
     for k, o in enumerate(scene.obstacles):
-        box = _marker(t, frame_id, "obstacles", k, Marker.CUBE, OBSTACLE)
-        box.pose.position = _point(dim, o.centre(dim))
+        # a moving body is drawn in its own frame, which /tf moves and turns with it
+        frame, where = frame_id, np.asarray(o.centre(dim))
+        if o.motion is not None:
+            frame, where = frames.body_frame(frame_id, o.name), where - np.asarray(o.motion.centre)
+        box = _marker(t, frame, "obstacles", k, Marker.CUBE, OBSTACLE)
+        box.pose.position = _point(dim, where)
         extent = [abs(v) for v in frames.published(dim, np.subtract(o.hi, o.lo))]
         box.scale.x, box.scale.y, box.scale.z = (max(e, THIN) for e in extent)
         out.append(box)
         above = np.eye(3)[dim - 1] * (o.hi[dim - 1] - o.lo[dim - 1])
-        out.append(_label(t, frame_id, k, dim, np.add(o.centre(dim), above), o.name, size))
+        out.append(_label(t, frame, k, dim, where + above, o.name, size))
     up = dim - 1
     for k, p in enumerate(scene.probes):
         m = _marker(t, frame_id, "probes", k, Marker.SPHERE_LIST, PROBE)

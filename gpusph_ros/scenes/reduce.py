@@ -215,8 +215,13 @@ def translate(scene: Scene, offset) -> Scene:
     def move_box(box):
         return dataclasses.replace(box, lo=move(box.lo), hi=move(box.hi))
 
+    def move_obstacle(o):  # a moving body's reference point goes with its box
+        moved = move_box(o)
+        return moved if o.motion is None else dataclasses.replace(
+            moved, motion=dataclasses.replace(o.motion, centre=move(o.motion.centre)))
+
     return dataclasses.replace(scene, fluid=[move_box(b) for b in scene.fluid],
-                               obstacles=[move_box(o) for o in scene.obstacles],
+                               obstacles=[move_obstacle(o) for o in scene.obstacles],
                                probes=[dataclasses.replace(p, position=move(p.position)) for p in scene.probes])
 
 
