@@ -1,8 +1,9 @@
 """The step loop replayed from a captured graph (sph/graph.py) takes the steps the eager loop takes,
 bit for bit, on the CPU (Warp's API capture), over more than 200 steps and eight outputs: dynamic
-walls with the Shepard filter, mDBC, and a zone under multirate (the list builds, reorders, census,
-filter and level changes all branches of the captured step). A replayed loop stops for the host
-every 64 steps when it can be interrupted, and a reconfigure takes effect in the next replay."""
+walls with the Shepard filter, mDBC, a zone under multirate (the list builds, reorders, census,
+filter and level changes all branches of the captured step), and bodies that move and float. A
+replayed loop stops for the host every 64 steps when it can be interrupted, and a reconfigure takes
+effect in the next replay."""
 import hashlib
 
 import numpy as np
@@ -18,7 +19,13 @@ COLUMN = {**TANK, "fluid": [{"name": "water", "lo": [0.0, 0.0], "hi": [0.12, 0.2
 DOWNSTREAM = {"name": "downstream", "lo": [0.2, 0.0], "hi": [0.6, 0.32], "ratio": 0.5}
 CASES = {"dynamic": (COLUMN, dict(dx=0.01, shepard_every=30)),
          "mdbc": (COLUMN, dict(dx=0.01, boundary="mdbc")),
-         "zoned": ({**COLUMN, "refine": [DOWNSTREAM]}, dict(dx=0.02))}
+         "zoned": ({**COLUMN, "refine": [DOWNSTREAM]}, dict(dx=0.02)),
+         # a paddle on a sinusoid and a box floating on the column (sph/bodies.py)
+         "bodies": ({**COLUMN, "obstacles": [
+             {"name": "paddle", "lo": [0.3, 0.0], "hi": [0.34, 0.32],
+              "motion": {"type": "sinusoid", "amplitude": [0.01, 0.0], "period": 0.1, "phase_deg": -90}},
+             {"name": "box", "lo": [0.03, 0.18], "hi": [0.09, 0.22], "displaces_fluid": True,
+              "floating": {"density": 500.0}}]}, dict(dx=0.01))}
 
 
 def digest(solver) -> str:
