@@ -20,6 +20,9 @@ stream of poses about one output behind. A command older than the timeout is hel
 no longer: the body is brought to rest within the limits. Where the body is to go is kept where its
 box stays in the tank (its translation: a rotation's sweep is not checked); a 2D body turns about z
 only.
+
+A floating body may also be pushed: ``WrenchHold`` keeps the external force and torque a client
+sets (world axes, about its centre of mass), under the same refusals, for a timeout.
 """
 import math
 import threading
@@ -143,3 +146,38 @@ class BodyDriver:
         angular_acceleration = _limit((want_w - w) / interval, m.max_angular_acceleration)
         return {"t0": now, "position": x, "quaternion": np.asarray(pose["quaternion"], dtype=float), "velocity": v,
                 "omega": w, "acceleration": acceleration, "angular_acceleration": angular_acceleration}
+
+
+class WrenchHold:
+    """The external force and torque on one floating body (a tether, a thruster), world axes about its
+    centre of mass, as its last ``cmd_wrench`` set them: refused as a command is (not finite, from
+    the future, older than the timeout or than the last taken), held for ``timeout`` seconds of
+    simulated time after its stamp, then none."""
+
+    def __init__(self, timeout: float):
+        self.timeout = timeout
+        self._lock = threading.Lock()
+        self._wrench = None  # (stamp, force, torque)
+
+    def command(self, stamp: float, now: float, force, torque) -> tuple:
+        """(taken, what was done or why not)."""
+        force, torque = np.asarray(force, dtype=float), np.asarray(torque, dtype=float)
+        if not (np.all(np.isfinite(force)) and np.all(np.isfinite(torque)) and math.isfinite(stamp)):
+            return False, "wrench: a number is not finite"
+        if stamp > now + 1.0e-9:
+            return False, f"wrench: stamped {stamp:.4f} s, later than the simulated time {now:.4f} s"
+        if stamp < now - self.timeout:
+            return False, f"wrench: stamped {stamp:.4f} s, older than the timeout {self.timeout:g} s at {now:.4f} s"
+        with self._lock:
+            if self._wrench is not None and stamp < self._wrench[0]:
+                return False, f"wrench: stamped {stamp:.4f} s, before the last one taken ({self._wrench[0]:.4f} s)"
+            self._wrench = (stamp, force, torque)
+        return True, "taken"
+
+    def wrench(self, now: float) -> tuple:
+        """(force, torque) to apply from ``now``: the last one taken while it is fresh, else none."""
+        with self._lock:
+            held = self._wrench
+        if held is None or now - held[0] > self.timeout:
+            return np.zeros(3), np.zeros(3)
+        return held[1], held[2]

@@ -21,7 +21,7 @@ import numpy as np
 import yaml
 from std_msgs.msg import String
 
-from .drive import BodyDriver
+from .drive import BodyDriver, WrenchHold
 from .measure import cloud
 from .measure.suite import Measurements
 from .output import frames, markers, messages, state_file
@@ -29,6 +29,7 @@ from .scenes.build import build_run
 from .sph import bodies, checkpoint
 
 NAMESPACE = "/sim_node"
+WRENCH_TIMEOUT = 0.5  # [s] of simulated time an external wrench on a floating body is held
 # QoS the node offers and the recording states (rosbag2 replays with it): /clock as Gazebo's bridge
 # offers it, the cloud with depth 1 so a slow subscriber gets the newest and no backlog
 CLOCK_QOS = {"reliable": True, "depth": 10}
@@ -73,6 +74,18 @@ class Run:
         self.drivers = {o.name: (self.model.bodies[o.name], BodyDriver(o.motion, cfg.dim, o.lo, o.hi, world.tank))
                         for o in world.obstacles
                         if isinstance(o.motion, bodies.Motion) and o.motion.law == "driven"}
+        # floating bodies by name: their body id and the external wrench a client holds on them
+        self.wrenches = {o.name: (self.model.bodies[o.name], WrenchHold(WRENCH_TIMEOUT))
+                         for o in world.obstacles if isinstance(o.motion, bodies.Floating)}
+        self._applied = {}  # the wrench each floating body's solver table holds
+
+    def push(self, body: str, stamp: float, force, torque) -> tuple:
+        """An external force and torque on a floating body (drive.WrenchHold: world axes, about its
+        centre of mass, stamped in simulated time): (taken, what was done or why not)."""
+        if body not in self.wrenches:
+            return False, (f"body: {body!r} is not a floating body of the scene (floating: "
+                           f"{', '.join(self.wrenches) or 'none'})")
+        return self.wrenches[body][1].command(stamp, self.solver.time, force, torque)
 
     def command(self, body: str, kind: str, stamp: float, a, b) -> tuple:
         """A driven body's command (drive.BodyDriver.command: a ``pose`` or a ``twist`` in the
@@ -241,6 +254,11 @@ class Run:
         k = self.next_output
         target = k / self.output.output_rate
         start = time.perf_counter()
+        for name, (body, hold) in self.wrenches.items():  # the floating bodies' external wrenches to this output
+            wrench = hold.wrench(self.solver.time)
+            if not all(np.array_equal(a, b) for a, b in zip(wrench, self._applied.get(name, (None, None)))):
+                self.solver.apply_wrench(body, *wrench)
+                self._applied[name] = wrench
         if self.drivers:  # the driven bodies' segments to this output, from their last commands
             poses = self.solver.body_poses()
             for body, driver in self.drivers.values():

@@ -416,3 +416,33 @@ def test_a_box_that_sinks_comes_to_rest_on_the_floor_not_through_it():
     assert min(bottoms) >= -1e-9 and bottoms[-1] == pytest.approx(0.0, abs=1e-9)
     assert abs(body["velocity"][1]) < 1e-9
     assert solver.excluded_particles == 0
+
+
+@pytest.mark.physics
+def test_an_external_wrench_on_a_floating_body_is_held_for_its_timeout():
+    """A 6 kg brick far from the fluid (weak gravity), pushed once at t = 0 with 12 N along x and
+    0.05 N m about z (drive.WrenchHold through Run.push): the push is held at the outputs (20 Hz)
+    up to 0.5 s after its stamp, so it acts over [0, 0.55) s; at 1 s the brick moves at 12 / 6 x
+    0.55 m/s along x and its angular momentum about z is 0.05 x 0.55, to round-off; bad pushes are
+    refused."""
+    from gpusph_ros.runner import Run
+    from gpusph_ros.scenes.settings import resolve
+
+    # weak gravity: the brick falls 5 cm in 1 s, and the drop stays in its corner
+    scene = parse_scene({"name": "push", "dim": 3, "tank": [2.0, 2.0, 2.0], "walls": "planes",
+                         "gravity": [0, 0, -0.0981],
+                         "fluid": [{"name": "drop", "lo": [0.0, 0.0, 0.0], "hi": [0.1, 0.1, 0.1]}],
+                         "obstacles": [{"name": "brick", "lo": [0.35, 0.9, 1.65], "hi": [0.65, 1.1, 1.75],
+                                        "floating": {"density": 1000}}]})
+    run = Run(scene, resolve(scene, sets=["dx=0.02", "c0=30", "end_time=1.0", "output_rate=20",
+                                         "energy_growth_ratio=0"]))
+    assert run.push("brick", 0.0, [12.0, 0.0, 0.0], [0.0, 0.0, 0.05]) == (True, "taken")
+    assert not run.push("brick", 0.5, [1.0, 0.0, 0.0], [0.0, 0.0, 0.0])[0]  # from the future
+    assert not run.push("brick", 0.0, [math.nan, 0.0, 0.0], [0.0, 0.0, 0.0])[0]
+    assert not run.push("drop", 0.0, [1.0, 0.0, 0.0], [0.0, 0.0, 0.0])[0]  # not a floating body
+    while not run.done:
+        run.step_output()
+    body = run.solver.body_states()[0]
+    assert run.solver.time == pytest.approx(1.0)
+    assert body["velocity"][0] == pytest.approx(12.0 / 6.0 * 0.55, rel=1e-9)
+    assert body["angular_momentum"][2] == pytest.approx(0.05 * 0.55, rel=1e-9)

@@ -34,7 +34,7 @@ import time
 import numpy as np
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import PoseStamped, TwistStamped
+from geometry_msgs.msg import PoseStamped, TwistStamped, WrenchStamped
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor, ShutdownException, SingleThreadedExecutor
@@ -239,7 +239,8 @@ class SimNode(LifecycleNode):
 
     def _make_commands(self, run):
         """For each driven body of the scene, ``~/bodies/<name>/cmd_pose`` (PoseStamped) and
-        ``~/bodies/<name>/cmd_twist`` (TwistStamped); the previous scene's go."""
+        ``~/bodies/<name>/cmd_twist`` (TwistStamped); for each floating one ``~/bodies/<name>/
+        cmd_wrench`` (WrenchStamped, world axes, about its centre of mass); the previous scene's go."""
         for sub in self._command_subs.values():
             self._commands_node.destroy_subscription(sub)
         self._command_subs = {}
@@ -248,6 +249,10 @@ class SimNode(LifecycleNode):
                 self._command_subs[(name, kind)] = self._commands_node.create_subscription(
                     msg_type, f"{self.namespace}/bodies/{name}/cmd_{kind}",
                     functools.partial(self._command, name, kind), 10)
+        for name in run.wrenches:
+            self._command_subs[(name, "wrench")] = self._commands_node.create_subscription(
+                WrenchStamped, f"{self.namespace}/bodies/{name}/cmd_wrench",
+                functools.partial(self._command, name, "wrench"), 10)
 
     def _command(self, body: str, kind: str, msg):
         """A driven body's command (drive.py), in the published axes and stamped in simulated time
@@ -259,6 +264,16 @@ class SimNode(LifecycleNode):
             dim, now = run.model.config.dim, run.solver.time
             stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1.0e-9
             stamp = now if stamp == 0.0 else stamp - run.time_origin_ns * 1.0e-9
+            if kind == "wrench":
+                f, m = msg.wrench.force, msg.wrench.torque
+                if msg.header.frame_id not in ("", run.frame_id):
+                    taken, why = False, (f"wrench: frame {msg.header.frame_id!r}; expected the world frame "
+                                         f"{run.frame_id!r} (or none)")
+                else:
+                    taken, why = run.push(body, stamp, frames.scene_vector(dim, (f.x, f.y, f.z)),
+                                          frames.scene_vector(dim, (m.x, m.y, m.z), axial=True))
+                self._count(body, kind, taken, why)
+                return
             if kind == "pose":
                 p, q = msg.pose.position, msg.pose.orientation
                 a, b = frames.scene_vector(dim, (p.x, p.y, p.z)), np.array([q.x, q.y, q.z, q.w])
@@ -268,12 +283,16 @@ class SimNode(LifecycleNode):
                 v, w = msg.twist.linear, msg.twist.angular
                 a, b = frames.scene_vector(dim, (v.x, v.y, v.z)), frames.scene_vector(dim, (w.x, w.y, w.z), axial=True)
             taken, why = run.command(body, kind, stamp, a, b)
-            with self._commands_lock:
-                self.commands[(body, "taken" if taken else "refused")] += 1
-            if not taken or why != "taken":
-                self.get_logger().warning(f"~/bodies/{body}/cmd_{kind}: {why}", throttle_duration_sec=1.0)
+            self._count(body, kind, taken, why)
         except Exception as err:  # a command the layers below did not foresee: logged, never an exit
             self._internal(f"~/bodies/{body}/cmd_{kind}", err)
+
+    def _count(self, body: str, kind: str, taken: bool, why: str):
+        """A command taken or refused, counted for /diagnostics; a refusal or a clamp logged."""
+        with self._commands_lock:
+            self.commands[(body, "taken" if taken else "refused")] += 1
+        if not taken or why != "taken":
+            self.get_logger().warning(f"~/bodies/{body}/cmd_{kind}: {why}", throttle_duration_sec=1.0)
 
     def _make_publishers(self, run):
         """One publisher per topic of the scene's outputs (found from the outputs at t = 0);

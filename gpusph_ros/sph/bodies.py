@@ -31,7 +31,8 @@ stands where the scene put it.
 A floating body (DualSPHysics' floatings, GPUSPH's floating bodies) integrates Newton's and Euler's
 laws for a rigid body in the solver's own predictor-corrector, from the force and torque the fluid
 exerts on its particles (the reaction the force pass leaves on each, F = sum m_i acc_i, T = sum
-rho_i x m_i acc_i about X) and gravity:
+rho_i x m_i acc_i about X), gravity, and an external force and torque its driver may set (a tether,
+a thruster: drive.py):
 
     V' = F / M + g,  X' = V,  L' = T,  omega = I_w^-1 L,  I_w = R I_body R^T,  q' = (omega / 2) q
 
@@ -164,6 +165,8 @@ def build(scalar):
         release: wp.float64
         corner_lo: wp.vec3d  # floating: its box's corners less c0
         corner_hi: wp.vec3d
+        ext_force: wp.vec3d  # floating: an external force and torque about its centre of mass (world)
+        ext_torque: wp.vec3d
         t0: wp.float64  # driven: the segment's start, pose, velocities and constant accelerations
         x0: wp.vec3d
         q0: wp.quatd
@@ -308,8 +311,8 @@ def build(scalar):
         if law.kind != FLOATING:
             return
         body = base[b]
-        force = wp.cw_mul(sums[b, 0] + gravity * law.mass, law.translate)
-        torque = wp.cw_mul(sums[b, 1], law.rotate)
+        force = wp.cw_mul(sums[b, 0] + gravity * law.mass + law.ext_force, law.translate)
+        torque = wp.cw_mul(sums[b, 1] + law.ext_torque, law.rotate)
         if t <= law.release:  # held until released: it stands where it is, at rest
             force = wp.vec3d(wp.float64(0.0), wp.float64(0.0), wp.float64(0.0))
             torque = force
@@ -438,6 +441,12 @@ def build(scalar):
             table.append(law)
         return table
 
+    def external(law, force, torque):
+        """``law`` (a floating body's Law) with an external force and torque (world, about its
+        centre of mass)."""
+        law.ext_force, law.ext_torque = wp.vec3d(*force), wp.vec3d(*torque)
+        return law
+
     def segment(law, t0: float, position, quaternion, velocity, omega, acceleration, angular_acceleration):
         """``law`` (a Law) on the segment from t0 (driven_pose), all in the scene's axes."""
         law.t0 = t0
@@ -461,4 +470,5 @@ def build(scalar):
 
     return SimpleNamespace(Law=Law, Rigid=Rigid, Pose=Pose, body_poses=body_poses, move_walls=move_walls,
                            wrench_sums=wrench_sums, commit_rigid=commit_rigid, work_on_fluid=work_on_fluid,
-                           laws=laws, law_list=law_list, segment=segment, rigid_states=rigid_states)
+                           laws=laws, law_list=law_list, segment=segment, external=external,
+                           rigid_states=rigid_states)

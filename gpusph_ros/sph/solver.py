@@ -348,6 +348,16 @@ class Solver:
         B.segment(self._law_list[body], t0, position, quaternion, velocity, omega, acceleration, angular_acceleration)
         wp.copy(self._laws, wp.array(self._law_list, dtype=B.Law, device="cpu"))
 
+    def apply_wrench(self, body: int, force, torque):
+        """Set floating body ``body``'s external force and torque (world axes, about its centre of
+        mass) until set again: between two outputs, by the run's driver (drive.py)."""
+        if not isinstance(self.config.motions[body] if 0 <= body < len(self.config.motions) else None,
+                          bodies.Floating):
+            raise ValueError(f"body {body} is not a floating body")
+        B = bodies.build(self.scalar)
+        B.external(self._law_list[body], force, torque)
+        wp.copy(self._laws, wp.array(self._law_list, dtype=B.Law, device="cpu"))
+
     def body_poses(self) -> list:
         """Each moving body's pose as of the last step (a host read: for outputs), by body id:
         its reference point's position and velocity, its rotation quaternion (x, y, z, w) and
