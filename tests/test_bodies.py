@@ -243,7 +243,7 @@ def test_a_floating_box_heaves_about_archimedes_draft():
     ({"floating": {"density": 500, "buoyant": True}}, "obstacles[0].floating.buoyant", "density"),
     ({"floating": {"density": 500}, "motion": {"type": "move", "displacement": [0.1, 0], "duration": 1}},
      "obstacles[0]", "not both"),
-    ({}, "obstacles[0].lo", "unless it floats"),
+    ({}, "obstacles[0].lo", "unless it floats or moves"),
 ])
 def test_a_bad_floating_body_is_refused_naming_its_field(body, field, allowed):
     scene = {"name": "float", "dim": 2, "tank": [1.0, 0.6],
@@ -446,3 +446,29 @@ def test_an_external_wrench_on_a_floating_body_is_held_for_its_timeout():
     assert run.solver.time == pytest.approx(1.0)
     assert body["velocity"][0] == pytest.approx(12.0 / 6.0 * 0.55, rel=1e-9)
     assert body["angular_momentum"][2] == pytest.approx(0.05 * 0.55, rel=1e-9)
+
+
+@pytest.mark.physics
+def test_a_wedge_translates_at_constant_speed_and_its_particles_line_its_sides():
+    """A 30-degree wedge 0.4 m wide, apex at the still water surface, driven down at 1 m/s (motion
+    translate): its particles lie inside the wedge and within a kernel support (the wall's layers)
+    of its sides or its top, and at each output they stand 1 m/s x t below where they started."""
+    from gpusph_ros.scenes.build import wedge_particles
+
+    beta = math.radians(30.0)
+    top = 0.3 + 0.2 * math.tan(beta)
+    scene = parse_scene({"name": "wedge", "dim": 2, "tank": [1.0, 0.6],
+                         "fluid": [{"name": "water", "lo": [0, 0], "hi": [1.0, 0.3]}],
+                         "obstacles": [{"name": "wedge", "lo": [0.3, 0.3], "hi": [0.7, top], "shape": "wedge",
+                                        "deadrise_deg": 30.0, "motion": {"type": "translate", "velocity": [0, -1.0]}}]})
+    model = build(scene, dx=DX)
+    wedge = model.particles.body == 0
+    pts = model.particles.pos[wedge]
+    rise = pts[:, 1] - 0.3 - np.abs(pts[:, 0] - 0.5) * math.tan(beta)
+    assert (rise >= 0).all() and len(pts) == len(wedge_particles((0.3, 0.3, 0.0), (0.7, top, 0.0), DX, 2, 3, beta)[0])
+    assert ((rise * math.cos(beta) < 3 * DX) | (pts[:, 1] > top - 3 * DX)).all()
+    solver = Solver(model.config, model.particles)
+    for t in (0.01, 0.03):
+        solver.advance(t)
+        shift = solver.snapshot()["pos"][wedge] - pts
+        assert np.abs(shift[:, 0]).max() < 1e-6 and np.abs(shift[:, 1] + solver.time).max() < 1e-6

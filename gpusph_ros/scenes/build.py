@@ -46,6 +46,20 @@ def _inside(pts, lo, hi, dim):
     return np.all((pts[:, :dim] >= np.asarray(lo[:dim])) & (pts[:, :dim] <= np.asarray(hi[:dim])), axis=1)
 
 
+def wedge_particles(lo, hi, dx: float, dim: int, layers: int, deadrise: float):
+    """Boundary particles of a wedge in the box [lo, hi], apex down at the middle of its floor, its
+    sides rising at ``deadrise`` [rad] from the horizontal to the box's top (a prism along y in 3D):
+    fill_box's lattice points inside it and within ``layers`` spacings of its sides or its top, and
+    the volume each stands for."""
+    pts, volume = fill_box(lo, hi, dx, dim)
+    up = dim - 1
+    centre = 0.5 * (lo[0] + hi[0])
+    rise = pts[:, up] - lo[up] - np.abs(pts[:, 0] - centre) * np.tan(deadrise)  # above the side, vertically
+    inside = rise >= 0.0
+    near = (rise * np.cos(deadrise) < layers * dx) | (pts[:, up] > hi[up] - layers * dx)
+    return pts[inside & near], volume
+
+
 def block_particles(lo, hi, dx: float, dim: int, layers: int, bottom: bool = False):
     """Boundary particles of an obstacle box [lo, hi], and the volume each stands for: fill_box's
     lattice (the outer layer half a spacing, at most dx/2, in from each face, where the fluid meets a
@@ -191,7 +205,8 @@ def build_from(scene: Scene, cfg: SolverConfig) -> Model:
     for k, o in enumerate(scene.obstacles):
         if o.motion is None:  # a moving body's box is not where its particles are
             solids.append((o.lo, o.hi))
-        block, volume = block_particles(o.lo, o.hi, dx, dim, layers, bottom=o.motion is not None)
+        block, volume = wedge_particles(o.lo, o.hi, dx, dim, layers, o.deadrise) if o.shape == "wedge" else \
+            block_particles(o.lo, o.hi, dx, dim, layers, bottom=o.motion is not None)
         pos.append(block)
         rho.append(np.full(len(block), cfg.rho0))  # mostly dry at the start; dynamic ones adjust
         mass.append(np.full(len(block), cfg.rho0 * volume))

@@ -65,6 +65,8 @@ class Obstacle(Box):
     block_offsets: tuple = (0.0, 0.06)
     displaces_fluid: bool = False
     motion: object = None  # sph.bodies.Motion, or None: fixed
+    shape: str = "box"  # or "wedge": apex down, its sides rising at ``deadrise`` [rad] (build.wedge_particles)
+    deadrise: float = 0.0
 
     def centre(self, dim: int) -> tuple:
         """The body's reference point, the centre of its box (z = 0 in 2D): its torque is about it."""
@@ -307,18 +309,28 @@ def _obstacles(items, tank, dim, depth: float = 0.0, g: float = 9.81) -> list:
     for k, item in enumerate(items):
         where = f"obstacles[{k}]"
         item, name, lo, hi = _box(where, item, tank, dim,
-                                  extra_keys=("block_offsets", "displaces_fluid", "motion", "floating"))
+                                  extra_keys=("block_offsets", "displaces_fluid", "motion", "floating", "shape",
+                                              "deadrise_deg"))
         offsets = item.get("block_offsets", [0.0, 0.06])
         if not isinstance(offsets, list):
             raise ConfigError(f"{where}.block_offsets", offsets, "a list of distances >= 0 [m]")
         offsets = tuple(_number(f"{where}.block_offsets[{j}]", o, lo=0.0) for j, o in enumerate(offsets))
-        if lo[up] > 0.0 and item.get("floating") is None:
+        if lo[up] > 0.0 and item.get("floating") is None and item.get("motion") is None:
             raise ConfigError(f"{where}.lo", list(lo[:dim]), "a box standing on the floor (lo on the vertical axis "
-                                                             "0), unless it floats")
+                                                             "0), unless it floats or moves")
         displaces = item.get("displaces_fluid", False)
         if not isinstance(displaces, bool):
             raise ConfigError(f"{where}.displaces_fluid", displaces, "true or false")
         obstacle = Obstacle(name, lo, hi, offsets, displaces)
+        shape = item.get("shape", "box")
+        if shape not in SHAPES:
+            raise ConfigError(f"{where}.shape", shape, "one of " + ", ".join(SHAPES))
+        if (shape == "wedge") != ("deadrise_deg" in item):
+            raise ConfigError(f"{where}.deadrise_deg", item.get("deadrise_deg"), "the wedge's deadrise angle [deg], "
+                                                                                "for shape: wedge only")
+        if shape == "wedge":
+            obstacle.shape = shape
+            obstacle.deadrise = math.radians(_number(f"{where}.deadrise_deg", item["deadrise_deg"], lo=1.0, hi=80.0))
         if item.get("motion") is not None and item.get("floating") is not None:
             raise ConfigError(where, name, "one of motion (prescribed) and floating (moved by the fluid), not both")
         if item.get("motion") is not None:
@@ -330,7 +342,9 @@ def _obstacles(items, tank, dim, depth: float = 0.0, g: float = 9.81) -> list:
     return obstacles
 
 
-MOTION_KEYS = {"sinusoid": ("type", "amplitude", "period", "phase_deg", "angle_deg", "axis", "centre"),
+SHAPES = ("box", "wedge")  # an obstacle's shape inside its box
+MOTION_KEYS = {"translate": ("type", "velocity", "start"),
+               "sinusoid": ("type", "amplitude", "period", "phase_deg", "angle_deg", "axis", "centre"),
                "move": ("type", "displacement", "duration", "start"),
                "driven": ("type", "max_speed", "max_acceleration", "max_angular_speed", "max_angular_acceleration",
                           "timeout"),
@@ -371,7 +385,12 @@ def _motion(where, value, obstacle, tank, dim, depth: float = 0.0, g: float = 9.
     if kind not in bodies.LAWS:
         raise ConfigError(f"{where}.type", kind, "one of " + ", ".join(bodies.LAWS))
     keys = MOTION_KEYS[kind]
-    item = _mapping(where, value, keys, required={"sinusoid": ("type", "period")}.get(kind, keys[:3]))
+    item = _mapping(where, value, keys, required={"sinusoid": ("type", "period"),
+                                                  "translate": ("type", "velocity")}.get(kind, keys[:3]))
+    if kind == "translate":
+        return bodies.Motion(law="translate", centre=obstacle.centre(dim),
+                             amplitude=_pad3(_vector(f"{where}.velocity", item["velocity"], dim)),
+                             start=_number(f"{where}.start", item.get("start", 0.0), lo=0.0))
     if kind in ("piston", "flap"):
         if obstacle.lo[dim - 1] > 0.0:
             raise ConfigError(f"{where}.type", kind, "a paddle standing on the floor")

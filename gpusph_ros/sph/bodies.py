@@ -19,6 +19,8 @@ scene put the body:
   phi = -90 degrees starts it at rest; with a ``ramp``, both times (1 - cos(pi t / ramp)) / 2 until
   then (a wavemaker's start: the scene's ``piston`` and ``flap`` are such sinusoids, their stroke
   from linear wavemaker theory, theory/wavemaker.py);
+- ``translate``: d = A (t - start) from ``start`` on: a constant velocity A (a wedge's entry into
+  still water at constant speed);
 - ``move``: d = D [s - sin(2 pi s) / (2 pi)], s = (t - start) / duration clamped to [0, 1]: the
   displacement D over the duration, starting and ending at rest with a continuous acceleration
   (the velocity 1 - cos(2 pi s) times D / duration), no rotation.
@@ -64,9 +66,10 @@ import warp as wp
 from . import health
 from .state import BOUNDARY, DT, T
 
-FIXED, SINUSOID, MOVE, FLOATING, DRIVEN = 0, 1, 2, 3, 4
-LAWS = ("sinusoid", "move", "driven", "piston", "flap")  # the scene's ``motion.type`` (piston, flap: a sinusoid)
-LAW_ID = {"sinusoid": SINUSOID, "move": MOVE, "driven": DRIVEN}
+FIXED, SINUSOID, MOVE, FLOATING, DRIVEN, TRANSLATE = 0, 1, 2, 3, 4, 5
+# the scene's ``motion.type`` (piston, flap: a sinusoid)
+LAWS = ("translate", "sinusoid", "move", "driven", "piston", "flap")
+LAW_ID = {"translate": TRANSLATE, "sinusoid": SINUSOID, "move": MOVE, "driven": DRIVEN}
 
 
 @dataclass(frozen=True)
@@ -94,6 +97,8 @@ class Motion:
     def peak_speed(self, reach: float) -> float:
         """The largest speed [m/s] of a particle at most ``reach`` [m] from the centre: what the
         scene's check holds under c0 / 10."""
+        if self.law == "translate":
+            return float(np.linalg.norm(self.amplitude))
         if self.law == "driven":
             return self.max_speed + self.max_angular_speed * reach
         if self.law == "move":
@@ -210,6 +215,9 @@ def build(scalar):
             dr = wp.float64(0.5) * a * wp.sin(a * t)
             ddr = wp.float64(0.5) * a * a * wp.cos(a * t)
             return wp.vec3d(r * f[0], dr * f[0] + r * f[1], ddr * f[0] + wp.float64(2.0) * dr * f[1] + r * f[2])
+        if law.kind == TRANSLATE:  # at the velocity A from start on
+            return wp.vec3d(wp.max(t - law.start, wp.float64(0.0)), wp.where(t > law.start, wp.float64(1.0),
+                                                                               wp.float64(0.0)), wp.float64(0.0))
         if law.kind == MOVE:
             u = (t - law.start) / law.duration
             if u <= wp.float64(0.0):
@@ -302,7 +310,7 @@ def build(scalar):
         b = wp.tid()
         law = laws[b]
         t = clock[T] + factor * clock[DT]
-        if law.kind == SINUSOID or law.kind == MOVE:
+        if law.kind == SINUSOID or law.kind == MOVE or law.kind == TRANSLATE:
             poses[b] = prescribed_pose(law, t)
             return
         if law.kind == DRIVEN:
