@@ -24,6 +24,17 @@ def piston_tank(motion: dict, **more) -> dict:
     return scene
 
 
+def floating_box(lo, hi, density: float, dx: float):
+    """(model, solver) of a 2D box [lo, hi] of ``density`` floating (not turning) in a 1 m tank of
+    0.3 m of water, the water inside the box removed."""
+    scene = {"name": "float", "dim": 2, "tank": [1.0, 0.6],
+             "fluid": [{"name": "water", "lo": [0, 0], "hi": [1.0, 0.3]}],
+             "obstacles": [{"name": "box", "lo": list(lo), "hi": list(hi), "displaces_fluid": True,
+                            "floating": {"density": density, "rotate": False}}]}
+    model = build(parse_scene(scene), dx=dx)
+    return model, Solver(model.config, model.particles)
+
+
 def rotated(r, theta):
     c, s = math.cos(theta), math.sin(theta)
     return np.column_stack([c * r[:, 0] - s * r[:, 1], s * r[:, 0] + c * r[:, 1]])
@@ -206,12 +217,7 @@ def test_a_floating_box_heaves_about_archimedes_draft():
     crossing to the next, is recorded in docs/results/bodies.md, not tested: linear theory needs the
     section's added mass at that frequency, and in this narrow tank the radiated waves come back."""
     dx = 0.01
-    scene = {"name": "float", "dim": 2, "tank": [1.0, 0.6],
-             "fluid": [{"name": "water", "lo": [0, 0], "hi": [1.0, 0.3]}],
-             "obstacles": [{"name": "box", "lo": [0.4, 0.26], "hi": [0.6, 0.36], "displaces_fluid": True,
-                            "floating": {"density": 500.0, "rotate": False}}]}
-    model = build(parse_scene(scene), dx=dx)
-    solver = Solver(model.config, model.particles)
+    model, solver = floating_box((0.4, 0.26), (0.6, 0.36), 500.0, dx)
     assert model.config.motions[0].mass == pytest.approx(10.0)  # kg per metre of depth
     columns = np.concatenate([np.arange(0.05, 0.35, dx), np.arange(0.65, 0.95, dx)])
     times, bottoms, drafts = [], [], []
@@ -402,12 +408,7 @@ def test_a_box_that_sinks_comes_to_rest_on_the_floor_not_through_it():
     """A 2D box of density 2000 kg/m^3 let go in 0.3 m of water sinks (its weight twice its
     buoyancy) and stops on the tank's floor (bodies.wall_contact): its bottom never below the floor's
     face, at rest there by 1.5 s, no fluid lost."""
-    scene = {"name": "sink", "dim": 2, "tank": [1.0, 0.6],
-             "fluid": [{"name": "water", "lo": [0, 0], "hi": [1.0, 0.3]}],
-             "obstacles": [{"name": "stone", "lo": [0.45, 0.15], "hi": [0.55, 0.2], "displaces_fluid": True,
-                            "floating": {"density": 2000.0, "rotate": False}}]}
-    model = build(parse_scene(scene), dx=DX)
-    solver = Solver(model.config, model.particles)
+    model, solver = floating_box((0.45, 0.15), (0.55, 0.2), 2000.0, DX)
     bottoms = []
     for t in np.arange(0.1, 1.5 + 1e-9, 0.1):
         solver.advance(float(t))
