@@ -38,6 +38,21 @@ def _limit(v: np.ndarray, largest: float) -> np.ndarray:
     return v * (largest / norm) if norm > largest else v
 
 
+def refusal(kind: str, stamp: float, now: float, timeout: float, last: float, *values) -> str:
+    """Why a command of ``kind`` stamped ``stamp`` at simulated time ``now`` is refused, or "": a
+    number not finite, a stamp later than now, older than the timeout, or older than ``last``, the
+    stamp of the last command taken (the module's docstring)."""
+    if not (all(np.all(np.isfinite(v)) for v in values) and math.isfinite(stamp)):
+        return f"{kind}: a number is not finite"
+    if stamp > now + 1.0e-9:
+        return f"{kind}: stamped {stamp:.4f} s, later than the simulated time {now:.4f} s"
+    if stamp < now - timeout:
+        return f"{kind}: stamped {stamp:.4f} s, older than the timeout {timeout:g} s at {now:.4f} s"
+    if stamp < last:
+        return f"{kind}: stamped {stamp:.4f} s, before the last command taken ({last:.4f} s)"
+    return ""
+
+
 def _stopping_speed(gap: np.ndarray, velocity: np.ndarray, acceleration: float, interval: float) -> float:
     """The largest speed towards ``gap`` at the end of an interval over which the velocity changes
     at a constant rate from ``velocity``, from which the body still stops within what is left of the
@@ -93,14 +108,9 @@ class BodyDriver:
         m = self.motion
         if kind not in ("pose", "twist"):
             return False, f"command: {kind!r} is not one of pose, twist"
-        if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b)) and math.isfinite(stamp)):
-            return False, f"{kind}: a number is not finite"
-        if stamp > now + 1.0e-9:
-            return False, f"{kind}: stamped {stamp:.4f} s, later than the simulated time {now:.4f} s"
-        if stamp < now - m.timeout:
-            return False, f"{kind}: stamped {stamp:.4f} s, older than the timeout {m.timeout:g} s at {now:.4f} s"
-        if stamp < self._last_stamp:
-            return False, f"{kind}: stamped {stamp:.4f} s, before the last command taken ({self._last_stamp:.4f} s)"
+        why = refusal(kind, stamp, now, m.timeout, self._last_stamp, a, b)
+        if why:
+            return False, why
         note = "taken"
         if kind == "pose":
             if abs(float(np.linalg.norm(b)) - 1.0) > QUATERNION_TOLERANCE:
@@ -162,15 +172,11 @@ class WrenchHold:
     def command(self, stamp: float, now: float, force, torque) -> tuple:
         """(taken, what was done or why not)."""
         force, torque = np.asarray(force, dtype=float), np.asarray(torque, dtype=float)
-        if not (np.all(np.isfinite(force)) and np.all(np.isfinite(torque)) and math.isfinite(stamp)):
-            return False, "wrench: a number is not finite"
-        if stamp > now + 1.0e-9:
-            return False, f"wrench: stamped {stamp:.4f} s, later than the simulated time {now:.4f} s"
-        if stamp < now - self.timeout:
-            return False, f"wrench: stamped {stamp:.4f} s, older than the timeout {self.timeout:g} s at {now:.4f} s"
         with self._lock:
-            if self._wrench is not None and stamp < self._wrench[0]:
-                return False, f"wrench: stamped {stamp:.4f} s, before the last one taken ({self._wrench[0]:.4f} s)"
+            last = self._wrench[0] if self._wrench is not None else -math.inf
+            why = refusal("wrench", stamp, now, self.timeout, last, force, torque)
+            if why:
+                return False, why
             self._wrench = (stamp, force, torque)
         return True, "taken"
 

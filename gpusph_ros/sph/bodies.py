@@ -411,10 +411,6 @@ def build(scalar):
             return
         wp.atomic_add(total, slot, -clock[DT] * wp.float64(mass[i] * wp.dot(acc[i], vel[i])))
 
-    def laws(motions: list, device) -> wp.array:
-        """The device table of ``motions`` by body id (None: fixed), at least one entry."""
-        return wp.array(law_list(motions), dtype=Law, device=device)
-
     def law_list(motions: list) -> list:
         """The Law of each of ``motions`` by body id (None: fixed), at least one."""
         table = []
@@ -478,5 +474,5 @@ def build(scalar):
 
     return SimpleNamespace(Law=Law, Rigid=Rigid, Pose=Pose, body_poses=body_poses, move_walls=move_walls,
                            wrench_sums=wrench_sums, commit_rigid=commit_rigid, work_on_fluid=work_on_fluid,
-                           laws=laws, law_list=law_list, segment=segment, external=external,
+                           law_list=law_list, segment=segment, external=external,
                            rigid_states=rigid_states)

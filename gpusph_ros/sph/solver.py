@@ -339,23 +339,27 @@ class Solver:
     def drive(self, body: int, t0: float, position, quaternion, velocity, omega, acceleration,
               angular_acceleration):
         """Set driven body ``body``'s segment from t0 (bodies.driven_pose; the scene's axes, the
-        quaternion x, y, z, w): between two outputs, by the run's driver (drive.py). One small copy
-        to the device into the same table, which a captured step graph keeps reading."""
-        motion = self.config.motions[body] if 0 <= body < len(self.config.motions) else None
+        quaternion x, y, z, w): between two outputs, by the run's driver (drive.py)."""
+        motion = self._motion_of(body)
         if not isinstance(motion, bodies.Motion) or motion.law != "driven":
             raise ValueError(f"body {body} is not a driven body")
-        B = bodies.build(self.scalar)
-        B.segment(self._law_list[body], t0, position, quaternion, velocity, omega, acceleration, angular_acceleration)
-        wp.copy(self._laws, wp.array(self._law_list, dtype=B.Law, device="cpu"))
+        self._set_law(body, "segment", t0, position, quaternion, velocity, omega, acceleration, angular_acceleration)
 
     def apply_wrench(self, body: int, force, torque):
         """Set floating body ``body``'s external force and torque (world axes, about its centre of
         mass) until set again: between two outputs, by the run's driver (drive.py)."""
-        if not isinstance(self.config.motions[body] if 0 <= body < len(self.config.motions) else None,
-                          bodies.Floating):
+        if not isinstance(self._motion_of(body), bodies.Floating):
             raise ValueError(f"body {body} is not a floating body")
+        self._set_law(body, "external", force, torque)
+
+    def _motion_of(self, body: int):
+        return self.config.motions[body] if 0 <= body < len(self.config.motions) else None
+
+    def _set_law(self, body: int, change: str, *values):
+        """Body ``body``'s Law changed by ``bodies.<change>(law, *values)``, and the table copied to
+        the device into the same array, which a captured step graph keeps reading."""
         B = bodies.build(self.scalar)
-        B.external(self._law_list[body], force, torque)
+        getattr(B, change)(self._law_list[body], *values)
         wp.copy(self._laws, wp.array(self._law_list, dtype=B.Law, device="cpu"))
 
     def body_poses(self) -> list:
