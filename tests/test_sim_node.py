@@ -612,3 +612,43 @@ def test_a_paddle_driven_by_cmd_pose_follows_makes_waves_and_refuses_bad_command
     assert speeds.max() <= 0.5 + 1e-6 and x[-1] > x[0] + 0.05  # walked towards it, at the limit
     status = _diagnostic(client, lambda s: s["state"] in ("running", "paused"))
     assert int(status.get("excluded_particles", 0)) == 0
+
+
+def test_a_floating_box_takes_an_external_wrench_from_cmd_wrench(client, tmp_path):
+    """A 2D box floating at its draft (a scene file beside the test, 4 cm): a client holds 300 N/m
+    down on it through ~/bodies/box/cmd_wrench (world frame, z up): it sinks from its draft; a wrench
+    in another frame is refused and counted."""
+    from geometry_msgs.msg import PoseStamped
+
+    scene = {"name": "float", "dim": 2, "tank": [1.0, 0.6],
+             "fluid": [{"name": "water", "lo": [0, 0], "hi": [1.0, 0.3]}],
+             "obstacles": [{"name": "box", "lo": [0.4, 0.24], "hi": [0.6, 0.36], "displaces_fluid": True,
+                            "floating": {"density": 500.0, "rotate": False}}]}
+    path = tmp_path / "float.yaml"
+    path.write_text(yaml.safe_dump(scene))
+    pose_topic = "/sim_node/bodies/box/pose"
+    client.subscribe(pose_topic, PoseStamped, depth=100)
+    assert client.set_together(scene=str(path), dx=0.04, end_time=60.0).successful
+    _pause_and_reset(client)
+    client.clear(pose_topic)
+    publisher = client.node.create_publisher(WrenchStamped, "/sim_node/bodies/box/cmd_wrench", 10)
+    assert client.call("set_paused", SetBool, data=False).success
+    start = _t(client.wait_for(pose_topic, lambda m: len(m) > 0)[-1].header.stamp)
+    z0 = client.received(pose_topic)[-1].pose.position.z
+    wrong = WrenchStamped()
+    wrong.header.frame_id = "elsewhere"
+    publisher.publish(wrong)
+    deadline = time.monotonic() + 120.0
+    while time.monotonic() < deadline:
+        msg = WrenchStamped()  # a zero stamp: now
+        msg.wrench.force.z = -300.0
+        publisher.publish(msg)
+        poses = client.received(pose_topic)
+        if _t(poses[-1].header.stamp) >= start + 0.4:
+            break
+        time.sleep(0.02)
+    z = client.received(pose_topic)[-1].pose.position.z
+    assert z < z0 - 0.01  # pushed down by three times its weight
+    status = _diagnostic(client, lambda s: int(s.get("commands_refused_box", 0)) >= 1
+                         and int(s.get("commands_taken_box", 0)) >= 1)
+    assert status["level"] != DiagnosticStatus.ERROR

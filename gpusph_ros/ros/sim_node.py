@@ -255,11 +255,12 @@ class SimNode(LifecycleNode):
                 functools.partial(self._command, name, "wrench"), 10)
 
     def _command(self, body: str, kind: str, msg):
-        """A driven body's command (drive.py), in the published axes and stamped in simulated time
-        (a zero stamp: now); a refusal is logged with its reason, at most once a second."""
+        """A driven body's command or a floating body's external wrench (drive.py), in the published
+        axes and stamped in simulated time (a zero stamp: now); a refusal (a body the present scene
+        does not have among them too) is logged with its reason, at most once a second."""
         try:
             run = self.session.run
-            if run is None or body not in run.drivers:
+            if run is None:
                 return
             dim, now = run.model.config.dim, run.solver.time
             stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1.0e-9
