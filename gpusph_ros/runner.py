@@ -235,9 +235,10 @@ class Run:
         out = [("/clock", messages.clock(t))]
         sample = self.measurements.sample()
         out += messages.measurement_messages(t, sample, self.scene, self.namespace, self.frame_id)
-        # the moving bodies' frames, where tf2_msgs is installed
-        moving = markers.body_transforms(self.model.scene, self.frame_id, t, sample["poses"])
-        if sample["poses"] and moving is not None:
+        # the moving bodies' frames, where tf2_msgs is installed (a scene without one asks nothing)
+        moving = markers.body_transforms(self.model.scene, self.frame_id, t, sample["poses"]) if sample["poses"] \
+            else None
+        if moving is not None:
             out.append(("/tf", moving))
         if self._force_scales:
             out.append((f"{self.namespace}/bodies/force_arrows",

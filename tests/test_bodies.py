@@ -473,3 +473,20 @@ def test_a_wedge_translates_at_constant_speed_and_its_particles_line_its_sides()
         solver.advance(t)
         shift = solver.snapshot()["pos"][wedge] - pts
         assert np.abs(shift[:, 0]).max() < 1e-6 and np.abs(shift[:, 1] + solver.time).max() < 1e-6
+
+
+@pytest.mark.physics
+def test_a_moving_body_in_a_scene_with_an_origin_starts_where_it_was_built():
+    """A scene placed at an origin (as a cropped scene is) moves a moving body's reference point with
+    its box: the solver puts the paddle's particles on its law at t = 0 exactly where the build
+    put them, and the config's law is the scene's."""
+    import dataclasses
+
+    law = {"type": "sinusoid", "amplitude": [0.02, 0.0], "period": 1.0, "phase_deg": -90.0}
+    scene = dataclasses.replace(parse_scene(piston_tank(law)), origin=(1.5, 0.0, 0.0))
+    model = build(scene, dx=DX)
+    assert model.config.motions[0].centre == pytest.approx((1.57, 0.3, 0.0))
+    assert model.config.motions == [o.motion for o in model.scene.obstacles]
+    solver = Solver(model.config, model.particles)
+    paddle = model.particles.body == 0
+    assert np.abs(solver.snapshot()["pos"][paddle] - model.particles.pos[paddle]).max() < 1e-6

@@ -7,7 +7,6 @@ boundary particles on a lattice that fills each exactly (``block_particles``), a
 deep from its sides and its top, each its own body. Refinement zones (``refine:``) then split the
 particles in them (``refine.py``).
 """
-import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -235,13 +234,13 @@ def build_from(scene: Scene, cfg: SolverConfig) -> Model:
         def move(point):
             return tuple(c + o if abs(c) < 1.0e30 else c for c, o in zip(point, scene.origin))
 
+        scene = reduce.translate(scene, scene.origin)  # its moving bodies' reference points too
         cfg = cfg.replace(domain_lo=move(cfg.domain_lo), domain_hi=move(cfg.domain_hi), wall_lo=move(cfg.wall_lo),
                           wall_hi=move(cfg.wall_hi), wall_top=cfg.wall_top + scene.origin[scene.dim - 1],
                           solids=[(move(lo), move(hi)) for lo, hi in cfg.solids],
-                          motions=[m and dataclasses.replace(m, centre=move(m.centre)) for m in cfg.motions],
+                          motions=[o.motion for o in scene.obstacles] if cfg.motions else [],
                           zones=[(move(lo), move(hi), spacing) for lo, hi, spacing in cfg.zones],
                           planes=[Plane(point=move(p.point), normal=p.normal) for p in cfg.planes])
-        scene = reduce.translate(scene, scene.origin)
     particles = Particles(pos=pos, vel=np.zeros((len(pos), 3)), rho=columns["rho"], mass=columns["mass"],
                           ptype=columns["ptype"], body=columns["body"], spacing=spacing)
     return Model(scene=scene, config=cfg, particles=particles, bodies=bodies)

@@ -297,7 +297,7 @@ def _walls(walls_in, dim) -> dict:
     return walls
 
 
-def _obstacles(items, tank, dim, depth: float = 0.0, g: float = 9.81) -> list:
+def _obstacles(items, tank, dim, depth: float, g: float) -> list:
     """Solid boxes standing on the floor, each with its pressure-block offsets."""
     up = dim - 1
     obstacles = []
@@ -375,7 +375,7 @@ def _wavemaker(where, item, kind, obstacle, dim, depth, g) -> bodies.Motion:
                          period=period, ramp=ramp)
 
 
-def _motion(where, value, obstacle, tank, dim, depth: float = 0.0, g: float = 9.81) -> bodies.Motion:
+def _motion(where, value, obstacle, tank, dim, depth: float, g: float) -> bodies.Motion:
     """An obstacle's prescribed motion (sph/bodies.py): a sinusoid of its displacement and of its
     angle about an axis through ``centre`` (default the box's centre), a move by ``displacement``
     over ``duration`` (the box must stay in the tank over either's translation), or driven by
