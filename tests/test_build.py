@@ -4,8 +4,9 @@ mass = rho0 x volume, wet beds around footprints, walls as particles or planes p
 import numpy as np
 import pytest
 
-from gpusph_ros.scenes.build import block_particles, build, floor_rectangles
+from gpusph_ros.scenes.build import build, floor_rectangles
 from gpusph_ros.scenes.schema import load_scene
+from gpusph_ros.scenes.shapes import block_particles
 
 pytestmark = pytest.mark.unit
 

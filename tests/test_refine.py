@@ -29,8 +29,9 @@ import pytest
 from gpusph_ros.measure.sensors import WallPressure
 from gpusph_ros.measure.suite import Measurements
 from gpusph_ros.scenes import resources
-from gpusph_ros.scenes.build import block_particles, build
+from gpusph_ros.scenes.build import build
 from gpusph_ros.scenes.schema import parse_scene
+from gpusph_ros.scenes.shapes import block_particles
 from gpusph_ros.sph import HealthError, boundaries
 from gpusph_ros.sph.config import ConfigError
 from gpusph_ros.sph.eos import hydrostatic_density

@@ -46,8 +46,30 @@ def _label(t, frame_id, ident, dim, where, text, size) -> Marker:
     return m
 
 
+def _solid(t, frame_id, ident, obstacle, dim, where) -> Marker:
+    """An obstacle as RViz draws it: a cube (a wedge too, as its box), a sphere, or a cylinder
+    turned from the marker's z onto its axis (a 2D disc's is the scene's z, published as y)."""
+    kind = {"sphere": Marker.SPHERE, "cylinder": Marker.CYLINDER}.get(obstacle.shape, Marker.CUBE)
+    m = _marker(t, frame_id, "obstacles", ident, kind, OBSTACLE)
+    m.pose.position = _point(dim, where)
+    extent = [max(abs(v), THIN) for v in frames.published(dim, np.subtract(obstacle.hi, obstacle.lo))]
+    if kind == Marker.CYLINDER:
+        axis = np.asarray(frames.published(dim, np.eye(3)[obstacle.axis]))
+        along = int(np.argmax(np.abs(axis)))
+        across = [extent[a] for a in range(3) if a != along]
+        extent = [across[0], across[1], extent[along] if dim == 3 else THIN]
+        turn = np.cross([0.0, 0.0, 1.0], axis)  # about z x a by the angle between them
+        if np.linalg.norm(turn) > 0.0:
+            half = 0.5 * np.arccos(np.clip(axis[2], -1.0, 1.0))
+            x, y, z = np.sin(half) * turn / np.linalg.norm(turn)
+            m.pose.orientation.x, m.pose.orientation.y, m.pose.orientation.z = float(x), float(y), float(z)
+            m.pose.orientation.w = float(np.cos(half))
+    m.scale.x, m.scale.y, m.scale.z = extent
+    return m
+
+
 def geometry(scene, dx: float, frame_id: str, t: float = 0.0) -> MarkerArray:
-    """The tank's edges, the obstacles as boxes, each probe as a marker where it measures (a point,
+    """The tank's edges, the obstacles as solids (``_solid``), each probe as a marker where it measures (a point,
     a sensor's face, a column's cylinder, a profile's points, a gauge's vertical line), and their
     names, in ``frame_id`` (scene in world coordinates: a model's, whose origin is applied)."""
     dim, out = scene.dim, []
@@ -62,11 +84,7 @@ def geometry(scene, dx: float, frame_id: str, t: float = 0.0) -> MarkerArray:
         frame, where = frame_id, np.asarray(o.centre(dim))
         if o.motion is not None:
             frame, where = frames.body_frame(frame_id, o.name), where - np.asarray(o.motion.centre)
-        box = _marker(t, frame, "obstacles", k, Marker.CUBE, OBSTACLE)
-        box.pose.position = _point(dim, where)
-        extent = [abs(v) for v in frames.published(dim, np.subtract(o.hi, o.lo))]
-        box.scale.x, box.scale.y, box.scale.z = (max(e, THIN) for e in extent)
-        out.append(box)
+        out.append(_solid(t, frame, k, o, dim, where))
         above = np.eye(3)[dim - 1] * (o.hi[dim - 1] - o.lo[dim - 1])
         out.append(_label(t, frame, k, dim, where + above, o.name, size))
     up = dim - 1

@@ -3,7 +3,7 @@
 Fluid boxes are filled exactly (``boxes.fill_box``: top layer half a spacing below the stated
 surface, mass = rho0 x box volume). The wet bed covers the floor outside the fluid boxes' and
 obstacles' footprints, cut into rectangles that are each filled exactly. Obstacles are boxes of
-boundary particles on a lattice that fills each exactly (``block_particles``), a wall's thickness
+boundary particles on a lattice that fills each exactly (``shapes.block_particles``), a wall's thickness
 deep from its sides and its top, each its own body. Refinement zones (``refine:``) then split the
 particles in them (``refine.py``).
 """
@@ -17,8 +17,8 @@ from ..sph.eos import hydrostatic_density, hydrostatic_depth
 from ..sph.particles import Particles
 from ..sph.solver import Solver
 from ..sph.state import BOUNDARY, FLUID
-from . import reduce, refine, resources
-from .boxes import box_tank, cells, fill_box
+from . import reduce, refine, resources, shapes
+from .boxes import box_tank
 from .schema import Scene
 
 
@@ -39,46 +39,6 @@ class Model:
     def solver(self) -> Solver:
         """A solver that starts from this model."""
         return Solver(self.config, self.particles)
-
-
-def _inside(pts, lo, hi, dim):
-    return np.all((pts[:, :dim] >= np.asarray(lo[:dim])) & (pts[:, :dim] <= np.asarray(hi[:dim])), axis=1)
-
-
-def wedge_particles(lo, hi, dx: float, dim: int, layers: int, deadrise: float):
-    """Boundary particles of a wedge in the box [lo, hi], apex down at the middle of its floor, its
-    sides rising at ``deadrise`` [rad] from the horizontal to the box's top (a prism along y in 3D):
-    fill_box's lattice points inside it and within ``layers`` spacings of its sides or its top, and
-    the volume each stands for."""
-    pts, volume = fill_box(lo, hi, dx, dim)
-    up = dim - 1
-    centre = 0.5 * (lo[0] + hi[0])
-    rise = pts[:, up] - lo[up] - np.abs(pts[:, 0] - centre) * np.tan(deadrise)  # above the side, vertically
-    inside = rise >= 0.0
-    near = (rise * np.cos(deadrise) < layers * dx) | (pts[:, up] > hi[up] - layers * dx)
-    return pts[inside & near], volume
-
-
-def block_particles(lo, hi, dx: float, dim: int, layers: int, bottom: bool = False):
-    """Boundary particles of an obstacle box [lo, hi], and the volume each stands for: fill_box's
-    lattice (the outer layer half a spacing, at most dx/2, in from each face, where the fluid meets a
-    tank wall, whatever the block's size), ``layers`` deep from each side face and from the top: a
-    block as tall as the tank has a lid too, as a run-up without a wall friction climbs DamBreak 1's
-    0.4 m obstruction and fell into the open block (docs/results/wall_pressure.md). A block standing
-    on the floor has no bottom, the tank's floor is there; one that may leave it (``bottom``: a
-    floating or moving body) has one: a floating box without it filled from below, and a held box
-    at its draft felt a quarter of its buoyancy at dx = 1 cm."""
-    pts, volume = fill_box(lo, hi, dx, dim)
-    up = dim - 1
-    shell = np.zeros(len(pts), dtype=bool)
-    for ax in range(dim):
-        n = cells(hi[ax] - lo[ax], dx)
-        k = np.floor((pts[:, ax] - lo[ax]) / (hi[ax] - lo[ax]) * n).astype(int)  # the cell index
-        if ax != up:
-            shell |= (k < layers) | (k >= n - layers)
-        else:
-            shell |= (k >= n - layers) | ((k < layers) & bottom)
-    return pts[shell], volume
 
 
 def floor_rectangles(extent, footprints, dim: int) -> list:
@@ -190,7 +150,8 @@ def build_from(scene: Scene, cfg: SolverConfig) -> Model:
     cfg, parts = box_tank(cfg, scene.tank[:dim], boxes, walls=scene.walls, headroom=scene.headroom)
     keep = np.ones(len(parts), dtype=bool)
     for k, o in enumerate(scene.obstacles):
-        inside = (parts.ptype == FLUID) & _inside(parts.pos, o.lo, o.hi, dim)
+        # a round body also takes the lattice points a quarter spacing outside it, closer to its rings
+        inside = (parts.ptype == FLUID) & shapes.holds(o, parts.pos, dim, 0.25 * dx)
         if inside.any() and not o.displaces_fluid:
             raise ConfigError(f"obstacles[{k}]", o.name, f"a box clear of the fluid boxes: it covers {inside.sum()} "
                                                          "fluid particles; displaces_fluid: true removes them")
@@ -204,8 +165,7 @@ def build_from(scene: Scene, cfg: SolverConfig) -> Model:
     for k, o in enumerate(scene.obstacles):
         if o.motion is None:  # a moving body's box is not where its particles are
             solids.append((o.lo, o.hi))
-        block, volume = wedge_particles(o.lo, o.hi, dx, dim, layers, o.deadrise) if o.shape == "wedge" else \
-            block_particles(o.lo, o.hi, dx, dim, layers, bottom=o.motion is not None)
+        block, volume = shapes.particles(o, dx, dim, layers)
         pos.append(block)
         rho.append(np.full(len(block), cfg.rho0))  # mostly dry at the start; dynamic ones adjust
         mass.append(np.full(len(block), cfg.rho0 * volume))

@@ -26,7 +26,7 @@ from ..share import config_dir
 from ..sph import bodies
 from ..sph.config import ConfigError, unknown_key
 from ..theory import wavemaker
-from . import yaml_input
+from . import shapes, yaml_input
 from .boxes import WALL_KINDS, wall_faces
 
 PROBE_TYPES = ("point", "column", "profile", "gauge", "pressure_sensor")
@@ -65,8 +65,9 @@ class Obstacle(Box):
     block_offsets: tuple = (0.0, 0.06)
     displaces_fluid: bool = False
     motion: object = None  # sph.bodies.Motion, or None: fixed
-    shape: str = "box"  # or "wedge": apex down, its sides rising at ``deadrise`` [rad] (build.wedge_particles)
+    shape: str = "box"  # shapes.SHAPES: a wedge rises at ``deadrise`` [rad], a cylinder turns about ``axis``
     deadrise: float = 0.0
+    axis: int = 2  # 0, 1, 2: x, y, z (2D: z, the disc's)
 
     def centre(self, dim: int) -> tuple:
         """The body's reference point, the centre of its box (z = 0 in 2D): its torque is about it."""
@@ -310,7 +311,7 @@ def _obstacles(items, tank, dim, depth: float, g: float) -> list:
         where = f"obstacles[{k}]"
         item, name, lo, hi = _box(where, item, tank, dim,
                                   extra_keys=("block_offsets", "displaces_fluid", "motion", "floating", "shape",
-                                              "deadrise_deg"))
+                                              "deadrise_deg", "axis"))
         offsets = item.get("block_offsets", [0.0, 0.06])
         if not isinstance(offsets, list):
             raise ConfigError(f"{where}.block_offsets", offsets, "a list of distances >= 0 [m]")
@@ -322,15 +323,7 @@ def _obstacles(items, tank, dim, depth: float, g: float) -> list:
         if not isinstance(displaces, bool):
             raise ConfigError(f"{where}.displaces_fluid", displaces, "true or false")
         obstacle = Obstacle(name, lo, hi, offsets, displaces)
-        shape = item.get("shape", "box")
-        if shape not in SHAPES:
-            raise ConfigError(f"{where}.shape", shape, "one of " + ", ".join(SHAPES))
-        if (shape == "wedge") != ("deadrise_deg" in item):
-            raise ConfigError(f"{where}.deadrise_deg", item.get("deadrise_deg"), "the wedge's deadrise angle [deg], "
-                                                                                "for shape: wedge only")
-        if shape == "wedge":
-            obstacle.shape = shape
-            obstacle.deadrise = math.radians(_number(f"{where}.deadrise_deg", item["deadrise_deg"], lo=1.0, hi=80.0))
+        _shape(where, item, obstacle, dim)
         if item.get("motion") is not None and item.get("floating") is not None:
             raise ConfigError(where, name, "one of motion (prescribed) and floating (moved by the fluid), not both")
         if item.get("motion") is not None:
@@ -342,7 +335,34 @@ def _obstacles(items, tank, dim, depth: float, g: float) -> list:
     return obstacles
 
 
-SHAPES = ("box", "wedge")  # an obstacle's shape inside its box
+def _shape(where, item, obstacle, dim):
+    """An obstacle's shape inside its box (scenes/shapes.py), with a wedge's deadrise and a
+    cylinder's axis; a round shape's box is square across its axis (a cube for a sphere)."""
+    shape = item.get("shape", "box")
+    if shape not in shapes.SHAPES:
+        raise ConfigError(f"{where}.shape", shape, "one of " + ", ".join(shapes.SHAPES))
+    if (shape == "wedge") != ("deadrise_deg" in item):
+        raise ConfigError(f"{where}.deadrise_deg", item.get("deadrise_deg"), "the wedge's deadrise angle [deg], "
+                                                                            "for shape: wedge only")
+    if (shape == "cylinder" and dim == 3) != ("axis" in item):
+        raise ConfigError(f"{where}.axis", item.get("axis"), "the cylinder's axis, one of x, y, z, for shape: "
+                                                            "cylinder in 3D only (a 2D cylinder is a disc)")
+    if shape == "sphere" and dim == 2:
+        raise ConfigError(f"{where}.shape", shape, "box, wedge or cylinder in 2D (a 2D cylinder is a disc)")
+    obstacle.shape = shape
+    if shape == "wedge":
+        obstacle.deadrise = math.radians(_number(f"{where}.deadrise_deg", item["deadrise_deg"], lo=1.0, hi=80.0))
+    if "axis" in item:
+        if item["axis"] not in shapes.AXES:
+            raise ConfigError(f"{where}.axis", item["axis"], "one of " + ", ".join(shapes.AXES))
+        obstacle.axis = shapes.AXES.index(item["axis"])
+    if shape in ("cylinder", "sphere"):
+        across = [a for a in range(dim) if a != obstacle.axis or shape == "sphere"]
+        sizes = [obstacle.hi[a] - obstacle.lo[a] for a in across]
+        if max(sizes) - min(sizes) > 1.0e-9 * max(sizes):
+            names = ", ".join(shapes.AXES[a] for a in across)
+            raise ConfigError(f"{where}.hi", list(obstacle.hi[:dim]), f"a box as wide along {names} (the {shape} "
+                                                                      f"is inscribed in it); it is {sizes}")
 MOTION_KEYS = {"translate": ("type", "velocity", "start"),
                "sinusoid": ("type", "amplitude", "period", "phase_deg", "angle_deg", "axis", "centre"),
                "move": ("type", "displacement", "duration", "start"),
@@ -445,20 +465,20 @@ def _flags(where, value, length) -> tuple:
 
 
 def _floating(where, value, obstacle, dim) -> bodies.Floating:
-    """A floating obstacle (sph/bodies.py): its mass from ``density`` x its box's volume (area per
-    unit depth in 2D) or given, its centre of mass (default the box's centre), its inertia about
-    that (default a uniform solid box's, carried to the centre of mass), which axes it may move
-    along and turn about (2D: translate [x, y], rotate about z), when it is let go, and its
-    velocity and angular velocity then."""
+    """A floating obstacle (sph/bodies.py): its mass from ``density`` x its solid's volume (area per
+    unit depth in 2D; scenes/shapes.py) or given, its centre of mass (default the solid's centroid),
+    its inertia about that (default the uniform solid's, carried to the centre of mass), which axes
+    it may move along and turn about (2D: translate [x, y], rotate about z), when it is let go, and
+    its velocity and angular velocity then."""
     item = _mapping(where, value, FLOATING_KEYS)
     if ("density" in item) == ("mass" in item):
         raise ConfigError(where, value, "one of density [kg/m^3] and mass [kg; kg/m in 2D]")
-    size = [h - lo for lo, h in zip(obstacle.lo[:dim], obstacle.hi[:dim])]
+    body = shapes.solid(obstacle, dim)
     if "density" in item:
-        mass = _number(f"{where}.density", item["density"], lo=0.0, lo_open=True) * math.prod(size)
+        mass = _number(f"{where}.density", item["density"], lo=0.0, lo_open=True) * body.volume
     else:
         mass = _number(f"{where}.mass", item["mass"], lo=0.0, lo_open=True)
-    centre = obstacle.centre(dim)
+    centre = body.centroid
     com = _pad3(_vector(f"{where}.centre_of_mass", item["centre_of_mass"], dim)) if "centre_of_mass" in item else centre
     if "inertia" in item:
         given = item["inertia"]
@@ -471,7 +491,7 @@ def _floating(where, value, obstacle, dim) -> bodies.Floating:
             inertia = tuple(tuple(d if j == k else 0.0 for j in range(3))
                             for k, d in enumerate(_vector(f"{where}.inertia", given, 3, lo=0.0)))
     else:
-        about_centre = np.asarray(bodies.box_inertia(mass, obstacle.lo, obstacle.hi, dim))
+        about_centre = mass * np.asarray(body.inertia)
         d = np.asarray(com) - np.asarray(centre)
         shifted = about_centre - mass * (d @ d * np.eye(3) - np.outer(d, d))  # parallel axes, to the centre of mass
         inertia = tuple(tuple(float(c) for c in row) for row in (shifted if dim == 3 else np.diag(
@@ -486,7 +506,7 @@ def _floating(where, value, obstacle, dim) -> bodies.Floating:
                            release=_number(f"{where}.release", item.get("release", 0.0), lo=0.0),
                            velocity=velocity, omega=omega,
                            corner_lo=tuple(a - c for a, c in zip(obstacle.lo, com)),
-                           corner_hi=tuple(b - c for b, c in zip(obstacle.hi, com)))
+                           corner_hi=tuple(b - c for b, c in zip(obstacle.hi, com)), **shapes.contact(obstacle, dim))
 
 
 def _zones(items, tank, dim, obstacles) -> list:

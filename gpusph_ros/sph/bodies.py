@@ -121,9 +121,14 @@ class Floating:
     release: float = 0.0
     velocity: tuple = (0.0, 0.0, 0.0)  # [m/s] at t = 0 (once released)
     omega: tuple = (0.0, 0.0, 0.0)  # [rad/s] at t = 0
-    # its box's corners less the centre of mass at t = 0 [m]: what meets the tank's walls
+    # its box's corners less the centre of mass at t = 0 [m]: what meets the tank's walls, or for a
+    # round body (radius > 0) the box's centre: a sphere, or a cylinder of that radius about the unit
+    # ``round_axis`` (body frame) ``half_length`` either side of it
     corner_lo: tuple = (0.0, 0.0, 0.0)
     corner_hi: tuple = (0.0, 0.0, 0.0)
+    radius: float = 0.0
+    round_axis: tuple = (0.0, 0.0, 0.0)
+    half_length: float = 0.0
 
 
 def quaternion_matrix(q) -> np.ndarray:
@@ -132,17 +137,6 @@ def quaternion_matrix(q) -> np.ndarray:
     return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
                      [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
-
-
-def box_inertia(mass: float, lo, hi, dim: int) -> tuple:
-    """The inertia tensor of a uniform solid box [lo, hi] of ``mass`` about its centre: diagonal, M
-    (b^2 + c^2) / 12 and its permutations; in 2D the box's section turning about z, M (a^2 + b^2) /
-    12 per unit depth."""
-    a, b, c = (float(top - bottom) for bottom, top in zip(lo, hi))
-    if dim == 2:
-        c = 0.0
-    return ((mass * (b * b + c * c) / 12.0, 0.0, 0.0), (0.0, mass * (a * a + c * c) / 12.0, 0.0),
-            (0.0, 0.0, mass * (a * a + b * b) / 12.0))
 
 
 @functools.lru_cache(maxsize=None)
@@ -170,6 +164,9 @@ def build(scalar):
         release: wp.float64
         corner_lo: wp.vec3d  # floating: its box's corners less c0
         corner_hi: wp.vec3d
+        radius: wp.float64  # floating and round: its radius, axis (body frame) and half length
+        round_axis: wp.vec3d
+        half_length: wp.float64
         ext_force: wp.vec3d  # floating: an external force and torque about its centre of mass (world)
         ext_torque: wp.vec3d
         t0: wp.float64  # driven: the segment's start, pose, velocities and constant accelerations
@@ -276,18 +273,29 @@ def build(scalar):
 
     @wp.func
     def wall_contact(law: Law, body: Rigid, wall_lo: wp.vec3d, wall_hi: wp.vec3d) -> Rigid:
-        """The body kept inside the tank's walls [wall_lo, wall_hi]: where a corner of its box has
-        passed a wall's face it is moved back along that axis and its velocity into the wall is
-        taken away (a plastic contact without friction; its rotation is left as it is)."""
+        """The body kept inside the tank's walls [wall_lo, wall_hi]: where a corner of its box (the
+        surface of a round body) has passed a wall's face it is moved back along that axis and its
+        velocity into the wall is taken away (a plastic contact without friction; its rotation is
+        left as it is)."""
         low = wp.vec3d(wp.float64(1.0e300), wp.float64(1.0e300), wp.float64(1.0e300))
         high = -low
-        for k in range(8):
-            corner = wp.vec3d(wp.where(k % 2 == 0, law.corner_lo[0], law.corner_hi[0]),
-                              wp.where((k // 2) % 2 == 0, law.corner_lo[1], law.corner_hi[1]),
-                              wp.where(k // 4 == 0, law.corner_lo[2], law.corner_hi[2]))
-            p = body.x + wp.quat_rotate(body.q, corner)
-            low = wp.min(low, p)
-            high = wp.max(high, p)
+        if law.radius > wp.float64(0.0):
+            # a cylinder's reach along a world axis e: |a.e| L/2 + R sqrt(1 - (a.e)^2) (a sphere: R)
+            centre = body.x + wp.quat_rotate(body.q, wp.float64(0.5) * (law.corner_lo + law.corner_hi))
+            a = wp.quat_rotate(body.q, law.round_axis)
+            for ax in range(3):
+                reach = wp.abs(a[ax]) * law.half_length + law.radius * wp.sqrt(
+                    wp.max(wp.float64(1.0) - a[ax] * a[ax], wp.float64(0.0)))
+                low[ax] = centre[ax] - reach
+                high[ax] = centre[ax] + reach
+        else:
+            for k in range(8):
+                corner = wp.vec3d(wp.where(k % 2 == 0, law.corner_lo[0], law.corner_hi[0]),
+                                  wp.where((k // 2) % 2 == 0, law.corner_lo[1], law.corner_hi[1]),
+                                  wp.where(k // 4 == 0, law.corner_lo[2], law.corner_hi[2]))
+                p = body.x + wp.quat_rotate(body.q, corner)
+                low = wp.min(low, p)
+                high = wp.max(high, p)
         shift = wp.max(wall_lo - low, wp.vec3d(wp.float64(0.0))) - wp.max(high - wall_hi, wp.vec3d(wp.float64(0.0)))
         v = body.v
         for ax in range(3):
@@ -440,6 +448,7 @@ def build(scalar):
                 law.mass, law.release = m.mass, m.release
                 law.inertia, law.inv_inertia = wp.mat33d(*inertia.ravel()), wp.mat33d(*inverse.ravel())
                 law.corner_lo, law.corner_hi = wp.vec3d(*m.corner_lo), wp.vec3d(*m.corner_hi)
+                law.radius, law.round_axis, law.half_length = m.radius, wp.vec3d(*m.round_axis), m.half_length
                 law.translate = wp.vec3d(*(1.0 if f else 0.0 for f in m.translate))
                 law.rotate = wp.vec3d(*(1.0 if f else 0.0 for f in m.rotate))
             table.append(law)

@@ -1,0 +1,82 @@
+"""A body floating in a still tank against Archimedes: a box (its draft density / rho0 of its
+height), a disc or a sphere of half the water's density (its centre on the level), let go
+``--above`` over that and left to heave. Prints the body's height against the level far from it
+(the top fluid particle of each column outside the middle half of the tank, plus dx/2) every 0.02
+s, and the mean over its whole heave periods (between upward crossings of its mean height after
+0.5 s): the draft's error, and the heave period.
+
+    python bench/floating_draft.py --dim 3 --shape box --dx 0.01 [--end 2.0] [--set KEY=VALUE ...]
+"""
+import argparse
+import time
+
+import numpy as np
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--dim", type=int, choices=[2, 3], default=3)
+    ap.add_argument("--shape", choices=["box", "cylinder", "sphere"], default="box")
+    ap.add_argument("--dx", type=float, default=0.02)
+    ap.add_argument("--end", type=float, default=2.0)
+    ap.add_argument("--above", type=float, default=0.01, help="[m] let go this far above its rest")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    args = ap.parse_args()
+    import warp as wp
+
+    wp.config.log_level = wp.LOG_WARNING
+    from gpusph_ros.scenes.build import build
+    from gpusph_ros.scenes.schema import parse_scene
+    from gpusph_ros.scenes.yaml_input import value
+    from gpusph_ros.sph import Solver
+
+    dim, dx, up = args.dim, args.dx, args.dim - 1
+    width, depth, size = 0.5 if dim == 3 else 1.0, 0.25, 0.2  # tank, water, body
+    density = 500.0  # at rest every body's centre is on the level: a box 0.1 tall has a 5 cm draft
+    half = [size / 2] * (dim - 1) + [0.05] if args.shape == "box" else [size / 2] * dim
+    centre = [width / 2] * (dim - 1) + [depth + args.above]
+    body = {"name": "body", "lo": [c - h for c, h in zip(centre, half)], "hi": [c + h for c, h in zip(centre, half)],
+            "displaces_fluid": True, "floating": {"density": density, "rotate": False}}
+    if args.shape != "box":
+        body["shape"] = args.shape
+        if dim == 3 and args.shape == "cylinder":
+            body["axis"] = "y"
+    scene = parse_scene({"name": "float", "dim": dim, "tank": [width] * (dim - 1) + [0.5],
+                         "fluid": [{"name": "water", "lo": [0.0] * dim, "hi": [width] * (dim - 1) + [depth]}],
+                         "obstacles": [body]})
+    settings = {k: value(v) for k, _, v in (a.partition("=") for a in args.set)}
+    model = build(scene, dx=dx, **settings)
+    solver = Solver(model.config, model.particles)
+    print(f"{dim}D {args.shape} of density {density} at dx = {dx} m: {solver.n} particles, {settings}", flush=True)
+    t0, rows = time.perf_counter(), []
+    for t in np.arange(0.02, args.end + 1e-9, 0.02):
+        solver.advance(float(t))
+        snap = solver.snapshot()
+        fluid = snap["ptype"] == 0
+        pos = snap["pos"][fluid]
+        far = np.any(np.abs(pos[:, :up] - width / 2) > width / 4, axis=1)
+        cells = np.floor(pos[far, :up] / dx).astype(int)
+        keys = cells[:, 0] if dim == 2 else cells[:, 0] * 100000 + cells[:, 1]
+        order = np.lexsort((pos[far, up], keys))
+        last = np.r_[keys[order][1:] != keys[order][:-1], True]
+        level = float(pos[far, up][order][last].mean() + dx / 2)
+        height = solver.body_states()[0]["position"][up]
+        rows.append((solver.time, height, level))
+    r = np.array(rows)
+    below = r[:, 1] - r[r[:, 0] >= 0.5, 1].mean() < 0.0
+    ups = np.flatnonzero(below[:-1] & ~below[1:])
+    if len(ups) < 2:
+        raise SystemExit(f"{len(ups)} upward crossings by {args.end} s: a longer --end")
+    whole = slice(ups[0] + 1, ups[-1] + 1)
+    offset = float((r[whole, 1] - r[whole, 2]).mean())
+    if args.shape == "box":
+        print(f"draft {0.05 - offset:.5f} m against Archimedes' 0.05 m: {-offset / 0.05 * 100:+.1f}%", end="")
+    else:
+        print(f"centre {offset * 1000:+.2f} mm from the level ({offset / 0.1 * 100:+.1f}% of the radius)", end="")
+    periods = np.diff(r[ups, 0])
+    print(f"; heave period {periods.mean():.3f} s ({periods.min():.3f}-{periods.max():.3f}) over {len(periods)}; "
+          f"{solver.excluded_particles} excluded; {time.perf_counter() - t0:.0f} s", flush=True)
+
+
+if __name__ == "__main__":
+    main()
