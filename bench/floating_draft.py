@@ -3,7 +3,10 @@ height), a disc or a sphere of half the water's density (its centre on the level
 ``--above`` over that and left to heave. Prints the body's height against the level far from it
 (the top fluid particle of each column outside the middle half of the tank, plus dx/2) every 0.02
 s, and the mean over its whole heave periods (between upward crossings of its mean height after
-0.5 s): the draft's error, and the heave period.
+0.5 s): the draft's error; and the free decay of its heave from release, fitted with z0 + e^(-zeta
+omega_n t) (a cos omega_d t + b sin omega_d t) (a scan of omega_d and zeta, the rest least squares):
+against the damped period and damping ratio that linear theory's added mass and radiation damping
+give the 2D box (theory/heave.py, data/heave_added_mass/README.md).
 
     python bench/floating_draft.py --dim 3 --shape box --dx 0.01 [--end 2.0] [--set KEY=VALUE ...]
 """
@@ -11,6 +14,8 @@ import argparse
 import time
 
 import numpy as np
+
+TABLE = "box_B0.2_T0.05_h0.3.csv"  # the 2D box's section: 0.2 m beam, 0.05 m draft, 0.3 m of water
 
 
 def main():
@@ -20,18 +25,23 @@ def main():
     ap.add_argument("--dx", type=float, default=0.02)
     ap.add_argument("--end", type=float, default=2.0)
     ap.add_argument("--above", type=float, default=0.01, help="[m] let go this far above its rest")
+    ap.add_argument("--width", type=float, help="[m] the tank's (default 1 in 2D, 0.5 in 3D); a wide one keeps the "
+                                                "radiated waves away for longer")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     args = ap.parse_args()
     import warp as wp
 
     wp.config.log_level = wp.LOG_WARNING
+    from gpusph_ros.analysis.oscillation import free_decay
     from gpusph_ros.scenes.build import build
     from gpusph_ros.scenes.schema import parse_scene
     from gpusph_ros.scenes.yaml_input import value
+    from gpusph_ros.share import data_dir
     from gpusph_ros.sph import Solver
+    from gpusph_ros.theory import heave
 
     dim, dx, up = args.dim, args.dx, args.dim - 1
-    width, depth, size = 0.5 if dim == 3 else 1.0, 0.25, 0.2  # tank, water, body
+    width, depth, size = args.width or (0.5 if dim == 3 else 1.0), 0.3, 0.2  # tank, water, body
     density = 500.0  # at rest every body's centre is on the level: a box 0.1 tall has a 5 cm draft
     half = [size / 2] * (dim - 1) + [0.05] if args.shape == "box" else [size / 2] * dim
     centre = [width / 2] * (dim - 1) + [depth + args.above]
@@ -41,7 +51,7 @@ def main():
         body["shape"] = args.shape
         if dim == 3 and args.shape == "cylinder":
             body["axis"] = "y"
-    scene = parse_scene({"name": "float", "dim": dim, "tank": [width] * (dim - 1) + [0.5],
+    scene = parse_scene({"name": "float", "dim": dim, "tank": [width] * (dim - 1) + [0.6],
                          "fluid": [{"name": "water", "lo": [0.0] * dim, "hi": [width] * (dim - 1) + [depth]}],
                          "obstacles": [body]})
     settings = {k: value(v) for k, _, v in (a.partition("=") for a in args.set)}
@@ -73,9 +83,14 @@ def main():
         print(f"draft {0.05 - offset:.5f} m against Archimedes' 0.05 m: {-offset / 0.05 * 100:+.1f}%", end="")
     else:
         print(f"centre {offset * 1000:+.2f} mm from the level ({offset / 0.1 * 100:+.1f}% of the radius)", end="")
-    periods = np.diff(r[ups, 0])
-    print(f"; heave period {periods.mean():.3f} s ({periods.min():.3f}-{periods.max():.3f}) over {len(periods)}; "
-          f"{solver.excluded_particles} excluded; {time.perf_counter() - t0:.0f} s", flush=True)
+    fit = free_decay(r[:, 0], r[:, 1])
+    print(f"; free decay: damped period {fit['period']:.3f} s, damping ratio {fit['damping_ratio']:.3f} (residual "
+          f"{fit['rms'] * 1000:.2f} mm); {solver.excluded_particles} excluded; {time.perf_counter() - t0:.0f} s")
+    if dim == 2 and args.shape == "box":
+        theory = heave.natural(density * 0.02, 0.2, heave.table(data_dir("heave_added_mass") / TABLE))
+        print(f"linear theory (data/heave_added_mass): added mass {theory['added_mass']:.2f} kg/m, damped period "
+              f"{theory['damped_period']:.3f} s ({100 * (fit['period'] / theory['damped_period'] - 1):+.1f}%), "
+              f"damping ratio {theory['damping_ratio']:.3f}", flush=True)
 
 
 if __name__ == "__main__":

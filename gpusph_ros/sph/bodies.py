@@ -47,7 +47,12 @@ zeroed (and their angular velocity: a 2D body turns about z only). Until its ``r
 floating body is held where it stands. It meets the tank's walls (``wall_contact``): a corner of its
 box past a wall's face moves it back and takes its velocity into the wall away, a plastic contact
 without friction (DualSPHysics hands contacts to Project Chrono; this is the least that keeps a body
-that sinks or drifts inside the tank); bodies do not meet each other, nor fixed obstacles, yet.
+that sinks or drifts inside the tank). It meets a fixed obstacle's box the same way
+(``solid_contact``: its corner deepest in pushed out through the nearest face), and another floating
+body (``body_contacts``): the two pushed apart in inverse proportion to their masses and their
+velocities along the push made one, which keeps their momentum. A round body (a sphere, a 2D disc)
+meets others as its ball, a 3D cylinder as its box's corners. The pushes act at the centres: the
+contact turns nothing, and an edge meeting an edge (no corner inside) is not seen.
 
 The solver sets the bodies' poses at each stage of a step (the step's start, the half step, the
 candidate: ``body_poses``) and each body's particles on them (``move_walls``), with their velocity
@@ -179,12 +184,14 @@ def build(scalar):
 
     @wp.struct
     class Rigid:
-        """A floating body's state: centre of mass, its velocity, rotation, angular momentum (world)."""
+        """A floating body's state: centre of mass, its velocity, rotation, angular momentum (world),
+        and the sum of the contacts' pushes at its stage (zero when it touched nothing)."""
 
         x: wp.vec3d
         v: wp.vec3d
         q: wp.quatd
         ang: wp.vec3d
+        touch: wp.vec3d
 
     @wp.struct
     class Pose:
@@ -272,6 +279,14 @@ def build(scalar):
         return pose
 
     @wp.func
+    def corner_of(law: Law, body: Rigid, k: int) -> wp.vec3d:
+        """Corner k (0-7) of a body's box, in the world."""
+        corner = wp.vec3d(wp.where(k % 2 == 0, law.corner_lo[0], law.corner_hi[0]),
+                          wp.where((k // 2) % 2 == 0, law.corner_lo[1], law.corner_hi[1]),
+                          wp.where(k // 4 == 0, law.corner_lo[2], law.corner_hi[2]))
+        return body.x + wp.quat_rotate(body.q, corner)
+
+    @wp.func
     def wall_contact(law: Law, body: Rigid, wall_lo: wp.vec3d, wall_hi: wp.vec3d) -> Rigid:
         """The body kept inside the tank's walls [wall_lo, wall_hi]: where a corner of its box (the
         surface of a round body) has passed a wall's face it is moved back along that axis and its
@@ -290,10 +305,7 @@ def build(scalar):
                 high[ax] = centre[ax] + reach
         else:
             for k in range(8):
-                corner = wp.vec3d(wp.where(k % 2 == 0, law.corner_lo[0], law.corner_hi[0]),
-                                  wp.where((k // 2) % 2 == 0, law.corner_lo[1], law.corner_hi[1]),
-                                  wp.where(k // 4 == 0, law.corner_lo[2], law.corner_hi[2]))
-                p = body.x + wp.quat_rotate(body.q, corner)
+                p = corner_of(law, body, k)
                 low = wp.min(low, p)
                 high = wp.max(high, p)
         shift = wp.max(wall_lo - low, wp.vec3d(wp.float64(0.0))) - wp.max(high - wall_hi, wp.vec3d(wp.float64(0.0)))
@@ -304,11 +316,167 @@ def build(scalar):
                 v[ax] = wp.float64(0.0)
         body.x = body.x + shift
         body.v = v
+        body.touch = body.touch + shift
+        return body
+
+    @wp.func
+    def box_point(law: Law, body: Rigid, k: int) -> wp.vec3d:
+        """Point k (0-26) of a body's box, in the world: its corners, the middles of its edges and
+        faces, and its centre (each coordinate low, middle or high), so that two boxes meeting face
+        to face, whose corners lie on each other's faces, still find a point inside."""
+        mid = wp.float64(0.5) * (law.corner_lo + law.corner_hi)
+        point = wp.vec3d(wp.float64(0.0), wp.float64(0.0), wp.float64(0.0))
+        for ax in range(3):
+            c = (k // wp.where(ax == 0, 1, wp.where(ax == 1, 3, 9))) % 3  # k's base-3 digit ax
+            point[ax] = wp.where(c == 0, law.corner_lo[ax], wp.where(c == 1, mid[ax], law.corner_hi[ax]))
+        return body.x + wp.quat_rotate(body.q, point)
+
+    @wp.func
+    def ball(law: Law) -> bool:
+        """Whether a body meets others as a ball: a sphere, or a disc in 2D (its radius about the
+        centre of its box); a 3D cylinder meets them with its box's corners."""
+        return law.radius > wp.float64(0.0) and law.half_length == wp.float64(0.0)
+
+    @wp.func
+    def box_push(p: wp.vec3d, radius: wp.float64, centre: wp.vec3d, q: wp.quatd, half: wp.vec3d) -> wp.vec3d:
+        """How far a point (a ball of ``radius`` about it, 0 for a corner) must move to leave the box
+        of ``half`` extents about ``centre`` turned by q (an axis with no extent, a 2D scene's z,
+        bounds nothing): along the face nearest to it, or away from the box's nearest point."""
+        local = wp.quat_rotate_inv(q, p - centre)
+        near = local
+        inside = True
+        for ax in range(3):
+            if half[ax] > wp.float64(0.0):
+                near[ax] = wp.clamp(local[ax], -half[ax], half[ax])
+                if wp.abs(local[ax]) >= half[ax]:
+                    inside = False
+        push = wp.vec3d(wp.float64(0.0), wp.float64(0.0), wp.float64(0.0))
+        if inside:  # out through the nearest face, the ball's radius beyond it
+            depth = wp.float64(1.0e300)
+            for ax in range(3):
+                if half[ax] > wp.float64(0.0) and half[ax] - wp.abs(local[ax]) < depth:
+                    depth = half[ax] - wp.abs(local[ax])
+                    push = wp.vec3d(wp.float64(0.0), wp.float64(0.0), wp.float64(0.0))
+                    side = wp.where(local[ax] < wp.float64(0.0), -wp.float64(1.0), wp.float64(1.0))
+                    push[ax] = side * (depth + radius)
+        else:
+            gap = local - near
+            d = wp.length(gap)
+            if d < radius and d > wp.float64(0.0):
+                push = gap * ((radius - d) / d)
+        return wp.quat_rotate(q, push)
+
+    @wp.func
+    def ball_push(p: wp.vec3d, radius: wp.float64, centre: wp.vec3d, other: wp.float64) -> wp.vec3d:
+        """How far a point (a ball of ``radius``) must move to leave a ball of radius ``other`` about
+        ``centre``."""
+        gap = p - centre
+        d = wp.length(gap)
+        if d >= radius + other or d == wp.float64(0.0):
+            return wp.vec3d(wp.float64(0.0), wp.float64(0.0), wp.float64(0.0))
+        return gap * ((radius + other - d) / d)
+
+    @wp.func
+    def deepest(law: Law, body: Rigid, centre: wp.vec3d, q: wp.quatd, half: wp.vec3d,
+                other: wp.float64) -> wp.vec3d:
+        """The largest push that takes a body out of a box (``other`` 0) or a ball of radius
+        ``other`` (about ``centre``): its ball's, or that of the point of its box (``box_point``)
+        deepest in."""
+        best = wp.vec3d(wp.float64(0.0), wp.float64(0.0), wp.float64(0.0))
+        if ball(law):
+            p = body.x + wp.quat_rotate(body.q, wp.float64(0.5) * (law.corner_lo + law.corner_hi))
+            if other > wp.float64(0.0):
+                return ball_push(p, law.radius, centre, other)
+            return box_push(p, law.radius, centre, q, half)
+        for k in range(27):
+            push = wp.vec3d(wp.float64(0.0), wp.float64(0.0), wp.float64(0.0))
+            if other > wp.float64(0.0):
+                push = ball_push(box_point(law, body, k), wp.float64(0.0), centre, other)
+            else:
+                push = box_push(box_point(law, body, k), wp.float64(0.0), centre, q, half)
+            if wp.length(push) > wp.length(best):
+                best = push
+        return best
+
+    @wp.func
+    def stop_along(v: wp.vec3d, push: wp.vec3d) -> wp.vec3d:
+        """v less its part against ``push`` (a plastic, frictionless contact); v when push is 0."""
+        if wp.length(push) == wp.float64(0.0):
+            return v
+        n = wp.normalize(push)
+        into = wp.dot(v, n)
+        if into < wp.float64(0.0):
+            return v - into * n
+        return v
+
+    @wp.func
+    def solid_contact(law: Law, body: Rigid, lo: wp.vec3d, hi: wp.vec3d) -> Rigid:
+        """The body kept out of a fixed obstacle's box [lo, hi]: moved out by its deepest corner's
+        (its ball's) push, its velocity into the obstacle taken away."""
+        half = wp.float64(0.5) * (hi - lo)
+        push = deepest(law, body, wp.float64(0.5) * (lo + hi), wp.quatd(wp.float64(0.0), wp.float64(0.0),
+                                                                        wp.float64(0.0), wp.float64(1.0)),
+                       half, wp.float64(0.0))
+        if wp.length(push) > wp.float64(0.0):
+            body.x = body.x + push
+            body.v = stop_along(body.v, push)
+            body.touch = body.touch + push
         return body
 
     @wp.kernel(enable_backward=False, module="unique")
+    def body_contacts(laws: wp.array(dtype=Law), factor: wp.float64, out: wp.array(dtype=Rigid),
+                      poses: wp.array(dtype=Pose)):
+        """Floating bodies kept out of each other (one thread, body pairs in turn): where a point of
+        one's box (its ball) is inside the other's box (ball), the two are moved apart along the push
+        in inverse proportion to their masses and their velocities along it made one, as a plastic,
+        frictionless contact between their centres keeps their momentum; the poses follow. At the
+        candidate only (factor 1): the corrector recomputes the velocities from the step's start, and
+        would drop an exchange made at the half step."""
+        if factor < wp.float64(1.0):
+            return
+        n = laws.shape[0]
+        for a in range(n):
+            for b in range(a + 1, n):
+                la = laws[a]
+                lb = laws[b]
+                if la.kind != FLOATING or lb.kind != FLOATING:
+                    continue
+                ra = out[a]
+                rb = out[b]
+                # a's features in b's shape, and b's in a's (reversed)
+                centre_b = rb.x + wp.quat_rotate(rb.q, wp.float64(0.5) * (lb.corner_lo + lb.corner_hi))
+                centre_a = ra.x + wp.quat_rotate(ra.q, wp.float64(0.5) * (la.corner_lo + la.corner_hi))
+                push = deepest(la, ra, centre_b, rb.q, wp.float64(0.5) * (lb.corner_hi - lb.corner_lo),
+                               wp.where(ball(lb), lb.radius, wp.float64(0.0)))
+                back = deepest(lb, rb, centre_a, ra.q, wp.float64(0.5) * (la.corner_hi - la.corner_lo),
+                               wp.where(ball(la), la.radius, wp.float64(0.0)))
+                if wp.length(back) > wp.length(push):
+                    push = -back
+                if wp.length(push) == wp.float64(0.0):
+                    continue
+                total = la.mass + lb.mass
+                ra.x = ra.x + push * (lb.mass / total)
+                rb.x = rb.x - push * (la.mass / total)
+                nrm = wp.normalize(push)
+                closing = wp.dot(ra.v - rb.v, nrm)
+                if closing < wp.float64(0.0):
+                    ra.v = ra.v - nrm * (closing * lb.mass / total)
+                    rb.v = rb.v + nrm * (closing * la.mass / total)
+                out[a] = ra
+                out[b] = rb
+                pa = poses[a]
+                pb = poses[b]
+                pa.x = ra.x
+                pa.v = ra.v
+                pb.x = rb.x
+                pb.v = rb.v
+                poses[a] = pa
+                poses[b] = pb
+
+    @wp.kernel(enable_backward=False, module="unique")
     def body_poses(laws: wp.array(dtype=Law), clock: wp.array(dtype=wp.float64), factor: wp.float64,
-                   gravity: wp.vec3d, wall_lo: wp.vec3d, wall_hi: wp.vec3d, base: wp.array(dtype=Rigid),
+                   gravity: wp.vec3d, wall_lo: wp.vec3d, wall_hi: wp.vec3d, solid_lo: wp.array(dtype=wp.vec3d),
+                   solid_hi: wp.array(dtype=wp.vec3d), n_solids: int, base: wp.array(dtype=Rigid),
                    rates_at: wp.array(dtype=Rigid), sums: wp.array2d(dtype=wp.vec3d), out: wp.array(dtype=Rigid),
                    poses: wp.array(dtype=Pose)):
         """Each body's pose at t + factor dt: a prescribed body's from its law; a floating body's
@@ -336,9 +504,15 @@ def build(scalar):
             dt = factor * clock[DT]
             at = rates_at[b]
             body.x = body.x + at.v * dt
-            body.v = body.v + force * (dt / law.mass)
+            # a contact at the stage whose rates these are holds the velocity out of it too: the
+            # corrector moves the body with the half step's velocity, which a contact stopped, and
+            # would otherwise let the velocity into a floor it rests on grow unseen
+            body.v = stop_along(body.v + force * (dt / law.mass), at.touch)
+            body.touch = wp.vec3d(wp.float64(0.0), wp.float64(0.0), wp.float64(0.0))
             body.q = turned(body.q, angular_velocity(law, at), dt)
             body.ang = body.ang + torque * dt
+            for k in range(n_solids):
+                body = solid_contact(law, body, solid_lo[k], solid_hi[k])
             body = wall_contact(law, body, wall_lo, wall_hi)
         out[b] = body
         w = angular_velocity(law, body)
@@ -475,13 +649,15 @@ def build(scalar):
             body = Rigid()
             body.x = wp.vec3d(*(m.centre if m is not None else (0.0, 0.0, 0.0)))
             body.v, body.ang, body.q = wp.vec3d(0.0), wp.vec3d(0.0), wp.quatd(0.0, 0.0, 0.0, 1.0)
+            body.touch = wp.vec3d(0.0)
             if isinstance(m, Floating):
                 body.v = wp.vec3d(*m.velocity)
                 body.ang = wp.vec3d(*(np.asarray(m.inertia, dtype=np.float64) @ np.asarray(m.omega, dtype=np.float64)))
             table.append(body)
         return wp.array(table, dtype=Rigid, device=device)
 
-    return SimpleNamespace(Law=Law, Rigid=Rigid, Pose=Pose, body_poses=body_poses, move_walls=move_walls,
+    return SimpleNamespace(Law=Law, Rigid=Rigid, Pose=Pose, body_poses=body_poses, body_contacts=body_contacts,
+                           move_walls=move_walls,
                            wrench_sums=wrench_sums, commit_rigid=commit_rigid, work_on_fluid=work_on_fluid,
                            law_list=law_list, segment=segment, external=external,
                            rigid_states=rigid_states)

@@ -174,6 +174,11 @@ class Solver:
             self._body_sums = wp.zeros((nb, 2), dtype=wp.vec3d, device=dev)
             self._gravity64 = wp.vec3d(*cfg.gravity)
             self._walls64 = (wp.vec3d(*cfg.wall_lo), wp.vec3d(*cfg.wall_hi))
+            # the fixed obstacles' boxes a floating body meets, and whether two floating bodies may meet
+            boxes = cfg.solids or [((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))]
+            self._solids64 = tuple(wp.array(np.asarray([box[k] for box in boxes], dtype=np.float64), dtype=wp.vec3d,
+                                            device=dev) for k in (0, 1))
+            self._pairs = sum(isinstance(m, bodies.Floating) for m in cfg.motions) > 1
         self.fields = self._make_fields(self.pos, self.vel, self.rho, shared)
         self._fields_h = self._make_fields(self._pos_h, self._vel_h, self._rho_h, shared)
         self._fields_c = self._make_fields(self._pos_c, self._vel_c, self._rho_c, shared)
@@ -323,8 +328,11 @@ class Solver:
         base, rates_at, out = [(self._rigid, self._rigid, self._rigid), (self._rigid, self._rigid, self._rigid_h),
                                (self._rigid, self._rigid_h, self._rigid_c)][into]
         wp.launch(B.body_poses, dim=len(self.config.motions),
-                  inputs=[self._laws, self._clock, factor, self._gravity64, self._walls64[0], self._walls64[1], base,
-                          rates_at, self._body_sums, out, self._poses], device=dev)
+                  inputs=[self._laws, self._clock, factor, self._gravity64, self._walls64[0], self._walls64[1],
+                          *self._solids64, len(self.config.solids), base, rates_at, self._body_sums, out, self._poses],
+                  device=dev)
+        if self._pairs:
+            wp.launch(B.body_contacts, dim=1, inputs=[self._laws, factor, out, self._poses], device=dev)
         wp.launch(B.move_walls, dim=self.n, inputs=[self._laws, self._poses, self.ptype, self.body, self.ids,
                                                     self._rest, pos, vel, self.wall_acc], device=dev)
 
