@@ -119,3 +119,28 @@ def test_a_round_body_is_drawn_round_along_its_axis(dim, shape, lo, hi, more, ax
     q = m.pose.orientation
     assert np.abs(quaternion_matrix((q.x, q.y, q.z, q.w)) @ [0.0, 0.0, 1.0]) == pytest.approx(axis, abs=1e-12)
     assert (m.scale.x, m.scale.y) == pytest.approx((0.2, 0.2))
+
+
+@pytest.mark.physics
+def test_a_fixed_disc_leaves_the_water_beside_it_in_its_box():
+    """A fixed disc of radius 5 cm standing on the floor of 0.2 m of water, dx = 1 cm: the water in
+    its box's corners, outside the disc, stays (the build takes only what is within a quarter spacing
+    of the disc), and the disc's box is not a solid the health check keeps the fluid out of, so the
+    tank steps to 0.1 s with that water where it is."""
+    from gpusph_ros.scenes.build import build
+    from gpusph_ros.sph import Solver
+
+    scene = parse_scene({"name": "disc", "dim": 2, "tank": [0.6, 0.4],
+                         "fluid": [{"name": "water", "lo": [0.0, 0.0], "hi": [0.6, 0.2]}],
+                         "obstacles": [{"name": "disc", "shape": "cylinder", "lo": [0.25, 0.0], "hi": [0.35, 0.1],
+                                        "displaces_fluid": True}]})
+    model = build(scene, dx=0.01)
+    assert model.config.solids == []
+    solver = Solver(model.config, model.particles)
+    solver.advance(0.1)
+    snap = solver.snapshot()
+    pos = snap["pos"][snap["ptype"] == 0]
+    in_box = (np.abs(pos[:, 0] - 0.3) < 0.05) & (pos[:, 1] < 0.1)
+    outside = np.hypot(pos[:, 0] - 0.3, pos[:, 1] - 0.05) > 0.05
+    assert (in_box & outside).sum() > 10 and (in_box & ~outside).sum() == 0
+    assert solver.excluded_particles == 0

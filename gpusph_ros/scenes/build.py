@@ -163,7 +163,10 @@ def build_from(scene: Scene, cfg: SolverConfig) -> Model:
     layers = boundaries.model(cfg.boundary).layers(cfg.hdx)
     bodies, solids = {}, []
     for k, o in enumerate(scene.obstacles):
-        if o.motion is None:  # a moving body's box is not where its particles are
+        # a moving body's box is not where its particles are, and a fixed wedge's or round body's box
+        # holds fluid beside the solid: only a fixed box is a solid the fluid must stay out of (the
+        # health check's) and a floating body meets
+        if o.motion is None and o.shape == "box":
             solids.append((o.lo, o.hi))
         block, volume = shapes.particles(o, dx, dim, layers)
         pos.append(block)
