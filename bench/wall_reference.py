@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+import csv_rows
 from series import run_series
 
 REPO = Path(__file__).resolve().parents[1]
@@ -89,13 +90,7 @@ def main():
                 row[f"P{k}_peak"] = round(float(p.max()), 3) if len(p) else float("nan")
             row["onset"] = round(onset, 3)
             row["onset_shift"] = round(onset - ref_onset, 3)
-            new = not args.out.exists()
-            args.out.parent.mkdir(parents=True, exist_ok=True)
-            with open(args.out, "a", newline="") as f:
-                writer = csv.DictWriter(f, fieldnames=list(row))
-                if new:
-                    writer.writeheader()
-                writer.writerow(row)
+            csv_rows.append(args.out, row)
             cells = [" / ".join(f"{row.get(f'clipped_P{k}_w{w}_err_pct', float('nan')):+.0f}" for w in (1, 2, 3))
                      for k in (1, 2, 3, 4)]
             print(f"{boundary:8s} H/{per_h}: {wall:6.0f} s, {row['status'][:40]}; clipped windows P1-P4: "

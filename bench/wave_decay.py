@@ -15,6 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
+import csv_rows
+
 REPO = Path(__file__).resolve().parents[1]
 FIELDS = ["period", "depth", "wave_height", "kh", "dx", "walls", "settings", "particles", "wall_s", "window",
           "decay_per_m", "err_0.5_1.5m_pct", "heights"]
@@ -91,12 +93,7 @@ def main():
            "window": f"{start:.2f}-{end:.2f}", "decay_per_m": round(float(decay), 4),
            "err_0.5_1.5m_pct": round(float(errors[(xs >= 0.5) & (xs <= 1.5)].mean()), 1),
            "heights": " ".join(f"{e:+.1f}" for e in errors)}
-    new = not args.out.exists()
-    with open(args.out, "a", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=FIELDS)
-        if new:
-            w.writeheader()
-        w.writerow(row)
+    csv_rows.append(args.out, row, FIELDS)
 
 
 if __name__ == "__main__":

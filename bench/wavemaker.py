@@ -19,6 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
+import csv_rows
+
 REPO = Path(__file__).resolve().parents[1]
 FIELDS = ["kind", "period", "depth", "wave_height", "kh", "dx", "settings", "particles", "wall_s", "window",
           "H_g1", "H_g2", "H_g3", "err_g1_pct", "err_g2_pct", "err_g3_pct", "period_fit", "excluded"]
@@ -102,12 +104,7 @@ def main():
                **{f"err_g{n + 1}_pct": round(100 * (v / args.height - 1), 1) for n, v in enumerate(heights)},
                "period_fit": round(period_fit, 4), "excluded": run.solver.excluded_particles}
         print(row, flush=True)
-        new = not args.out.exists()
-        with open(args.out, "a", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=FIELDS)
-            if new:
-                w.writeheader()
-            w.writerow(row)
+        csv_rows.append(args.out, row, FIELDS)
 
 
 if __name__ == "__main__":

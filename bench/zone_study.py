@@ -36,6 +36,7 @@ import numpy as np
 import warp as wp
 import yaml
 
+import csv_rows
 from series import run_series
 
 LOBOVSKY_HEIGHTS_MM = (3, 15, 30, 80)
@@ -182,12 +183,7 @@ def main(argv=None):
         if (args.case and name not in args.case) or name in done:
             continue
         row = {"case": name, "dx_m": dx, "end_s": study.end, **run_case(study, dx, refine)}
-        new = not out.exists()
-        with out.open("a", newline="") as f:
-            writer = csv.DictWriter(f, fieldnames=list(row))
-            if new:
-                writer.writeheader()
-            writer.writerow(row)
+        csv_rows.append(out, row)
         print(row, flush=True)
     if args.chart:
         chart(study, args.study, out, Path(args.chart))
