@@ -279,12 +279,27 @@ def build(scalar):
         return pose
 
     @wp.func
+    def box_point(law: Law, body: Rigid, k: int) -> wp.vec3d:
+        """Point k (0-26) of a body's box, in the world: its corners, the middles of its edges and
+        faces, and its centre (each coordinate low, middle or high), so that two boxes meeting face
+        to face, whose corners lie on each other's faces, still find a point inside."""
+        mid = wp.float64(0.5) * (law.corner_lo + law.corner_hi)
+        point = wp.vec3d(wp.float64(0.0), wp.float64(0.0), wp.float64(0.0))
+        for ax in range(3):
+            c = (k // wp.where(ax == 0, 1, wp.where(ax == 1, 3, 9))) % 3  # k's base-3 digit ax
+            point[ax] = wp.where(c == 0, law.corner_lo[ax], wp.where(c == 1, mid[ax], law.corner_hi[ax]))
+        return body.x + wp.quat_rotate(body.q, point)
+
+    @wp.func
     def corner_of(law: Law, body: Rigid, k: int) -> wp.vec3d:
-        """Corner k (0-7) of a body's box, in the world."""
-        corner = wp.vec3d(wp.where(k % 2 == 0, law.corner_lo[0], law.corner_hi[0]),
-                          wp.where((k // 2) % 2 == 0, law.corner_lo[1], law.corner_hi[1]),
-                          wp.where(k // 4 == 0, law.corner_lo[2], law.corner_hi[2]))
-        return body.x + wp.quat_rotate(body.q, corner)
+        """Corner k (0-7) of a body's box, in the world: the box point whose digits are all low or
+        high."""
+        return box_point(law, body, 2 * (k % 2) + 6 * ((k // 2) % 2) + 18 * (k // 4))
+
+    @wp.func
+    def box_centre(law: Law, body: Rigid) -> wp.vec3d:
+        """The centre of a body's box, in the world (a round body's centre): its middle box point."""
+        return box_point(law, body, 13)
 
     @wp.func
     def wall_contact(law: Law, body: Rigid, wall_lo: wp.vec3d, wall_hi: wp.vec3d) -> Rigid:
@@ -296,7 +311,7 @@ def build(scalar):
         high = -low
         if law.radius > wp.float64(0.0):
             # a cylinder's reach along a world axis e: |a.e| L/2 + R sqrt(1 - (a.e)^2) (a sphere: R)
-            centre = body.x + wp.quat_rotate(body.q, wp.float64(0.5) * (law.corner_lo + law.corner_hi))
+            centre = box_centre(law, body)
             a = wp.quat_rotate(body.q, law.round_axis)
             for ax in range(3):
                 reach = wp.abs(a[ax]) * law.half_length + law.radius * wp.sqrt(
@@ -318,18 +333,6 @@ def build(scalar):
         body.v = v
         body.touch = body.touch + shift
         return body
-
-    @wp.func
-    def box_point(law: Law, body: Rigid, k: int) -> wp.vec3d:
-        """Point k (0-26) of a body's box, in the world: its corners, the middles of its edges and
-        faces, and its centre (each coordinate low, middle or high), so that two boxes meeting face
-        to face, whose corners lie on each other's faces, still find a point inside."""
-        mid = wp.float64(0.5) * (law.corner_lo + law.corner_hi)
-        point = wp.vec3d(wp.float64(0.0), wp.float64(0.0), wp.float64(0.0))
-        for ax in range(3):
-            c = (k // wp.where(ax == 0, 1, wp.where(ax == 1, 3, 9))) % 3  # k's base-3 digit ax
-            point[ax] = wp.where(c == 0, law.corner_lo[ax], wp.where(c == 1, mid[ax], law.corner_hi[ax]))
-        return body.x + wp.quat_rotate(body.q, point)
 
     @wp.func
     def ball(law: Law) -> bool:
@@ -384,7 +387,7 @@ def build(scalar):
         deepest in."""
         best = wp.vec3d(wp.float64(0.0), wp.float64(0.0), wp.float64(0.0))
         if ball(law):
-            p = body.x + wp.quat_rotate(body.q, wp.float64(0.5) * (law.corner_lo + law.corner_hi))
+            p = box_centre(law, body)
             if other > wp.float64(0.0):
                 return ball_push(p, law.radius, centre, other)
             return box_push(p, law.radius, centre, q, half)
@@ -444,8 +447,8 @@ def build(scalar):
                 ra = out[a]
                 rb = out[b]
                 # a's features in b's shape, and b's in a's (reversed)
-                centre_b = rb.x + wp.quat_rotate(rb.q, wp.float64(0.5) * (lb.corner_lo + lb.corner_hi))
-                centre_a = ra.x + wp.quat_rotate(ra.q, wp.float64(0.5) * (la.corner_lo + la.corner_hi))
+                centre_b = box_centre(lb, rb)
+                centre_a = box_centre(la, ra)
                 push = deepest(la, ra, centre_b, rb.q, wp.float64(0.5) * (lb.corner_hi - lb.corner_lo),
                                wp.where(ball(lb), lb.radius, wp.float64(0.0)))
                 back = deepest(lb, rb, centre_a, ra.q, wp.float64(0.5) * (la.corner_hi - la.corner_lo),

@@ -157,6 +157,9 @@ class Solver:
                       hsml=self.hsml, ptype=self.ptype, body=self.body, tau_diag=wp.zeros(n, dtype=v, device=dev),
                       tau_off=wp.zeros(n, dtype=v, device=dev), wall_acc=wp.zeros(n, dtype=v, device=dev))
         self.wall_acc = shared["wall_acc"]
+        # the fixed obstacles' boxes: the health check's and the floating bodies' (at least one entry,
+        # unread when there are none)
+        solids = cfg.solids or [((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))]
         # prescribed motion (bodies.py): each body's law, and where its particles stood at t = 0 in
         # the caller's order (``ids`` finds them after a reorder); a scene without motion has none
         self._moving = any(m is not None for m in cfg.motions)
@@ -174,9 +177,9 @@ class Solver:
             self._body_sums = wp.zeros((nb, 2), dtype=wp.vec3d, device=dev)
             self._gravity64 = wp.vec3d(*cfg.gravity)
             self._walls64 = (wp.vec3d(*cfg.wall_lo), wp.vec3d(*cfg.wall_hi))
-            # the fixed obstacles' boxes a floating body meets, and whether two floating bodies may meet
-            boxes = cfg.solids or [((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))]
-            self._solids64 = tuple(wp.array(np.asarray([box[k] for box in boxes], dtype=np.float64), dtype=wp.vec3d,
+            # the fixed obstacles' boxes a floating body meets (in float64, as its state), and whether
+            # two floating bodies may meet
+            self._solids64 = tuple(wp.array(np.asarray([box[k] for box in solids], dtype=np.float64), dtype=wp.vec3d,
                                             device=dev) for k in (0, 1))
             self._pairs = sum(isinstance(m, bodies.Floating) for m in cfg.motions) > 1
         self.fields = self._make_fields(self.pos, self.vel, self.rho, shared)
@@ -188,7 +191,6 @@ class Solver:
         nrm = [np.asarray(p.normal, dtype=np.float64) / np.linalg.norm(p.normal) for p in planes] or [(0.0, 0.0, 1.0)]
         self._plane_pt, self._plane_n = arr(np.asarray(pts, dtype=np.float64), v), arr(np.asarray(nrm), v)
         self._maxima = wp.zeros(2 * self.launch.threads, dtype=s, device=dev)  # |a|max, |mu|max per chunk
-        solids = cfg.solids or [((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))]
         self.solid_lo = arr(np.asarray([lo for lo, _ in solids], dtype=np.float64), v)
         self.solid_hi = arr(np.asarray([hi for _, hi in solids], dtype=np.float64), v)
         zones = cfg.zones or [((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), cfg.dx)]
