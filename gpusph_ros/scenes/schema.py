@@ -356,13 +356,15 @@ def _shape(where, item, obstacle, dim):
         if item["axis"] not in shapes.AXES:
             raise ConfigError(f"{where}.axis", item["axis"], "one of " + ", ".join(shapes.AXES))
         obstacle.axis = shapes.AXES.index(item["axis"])
-    if shape in ("cylinder", "sphere"):
+    if shape in shapes.ROUND:
         across = [a for a in range(dim) if a != obstacle.axis or shape == "sphere"]
         sizes = [obstacle.hi[a] - obstacle.lo[a] for a in across]
         if max(sizes) - min(sizes) > 1.0e-9 * max(sizes):
             names = ", ".join(shapes.AXES[a] for a in across)
             raise ConfigError(f"{where}.hi", list(obstacle.hi[:dim]), f"a box as wide along {names} (the {shape} "
                                                                       f"is inscribed in it); it is {sizes}")
+
+
 MOTION_KEYS = {"translate": ("type", "velocity", "start"),
                "sinusoid": ("type", "amplitude", "period", "phase_deg", "angle_deg", "axis", "centre"),
                "move": ("type", "displacement", "duration", "start"),

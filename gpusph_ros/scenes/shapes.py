@@ -21,6 +21,7 @@ import numpy as np
 from .boxes import cells, fill_box
 
 SHAPES = ("box", "wedge", "cylinder", "sphere")
+ROUND = ("cylinder", "sphere")
 AXES = ("x", "y", "z")
 
 
@@ -56,16 +57,12 @@ def block_particles(lo, hi, dx: float, dim: int, layers: int, bottom: bool = Fal
     return pts[shell], volume
 
 
-def _wedge_rise(pts, lo, dim: int, centre: float, deadrise: float):
-    """How far each point stands above the wedge's side, vertically."""
-    return pts[:, dim - 1] - lo[dim - 1] - np.abs(pts[:, 0] - centre) * math.tan(deadrise)
-
-
 def wedge_particles(lo, hi, dx: float, dim: int, layers: int, deadrise: float):
     """Boundary particles of a wedge in the box [lo, hi]: fill_box's lattice points inside it and
     within ``layers`` spacings of its sides or its top, and the volume each stands for."""
     pts, volume = fill_box(lo, hi, dx, dim)
-    rise = _wedge_rise(pts, lo, dim, 0.5 * (lo[0] + hi[0]), deadrise)
+    # how far each point stands above the wedge's side, vertically
+    rise = pts[:, dim - 1] - lo[dim - 1] - np.abs(pts[:, 0] - 0.5 * (lo[0] + hi[0])) * math.tan(deadrise)
     near = (rise * math.cos(deadrise) < layers * dx) | (pts[:, dim - 1] > hi[dim - 1] - layers * dx)
     return pts[(rise >= 0.0) & near], volume
 
@@ -111,6 +108,12 @@ def _across(dim: int, axis: int) -> list:
     return [0, 1] if dim == 2 else [a for a in range(3) if a != axis]
 
 
+def radius(obstacle, dim: int) -> float:
+    """A round obstacle's radius: half its box's width across its axis (any axis of a sphere's)."""
+    across = _across(dim, obstacle.axis)[0]
+    return 0.5 * (obstacle.hi[across] - obstacle.lo[across])
+
+
 def cylinder_particles(lo, hi, dx: float, dim: int, layers: int, axis: int):
     """Boundary particles of the cylinder inscribed in [lo, hi] about ``axis``: rings ``layers``
     deep under its round surface, and in 3D slices a spacing apart along it, filled to the centre
@@ -118,8 +121,8 @@ def cylinder_particles(lo, hi, dx: float, dim: int, layers: int, axis: int):
     lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
     centre = 0.5 * (lo + hi)
     a, b = _across(dim, axis)
-    radius = 0.5 * (hi[a] - lo[a])
-    shell, full = _disc(radius, dx, layers), _disc(radius, dx, None)
+    r = 0.5 * (hi[a] - lo[a])
+    shell, full = _disc(r, dx, layers), _disc(r, dx, None)
     if dim == 2:
         pts = np.zeros((len(shell), 3))
         pts[:, [a, b]] = shell + centre[[a, b]]
@@ -140,8 +143,8 @@ def sphere_particles(lo, hi, dx: float, layers: int):
     """Boundary particles of the sphere inscribed in the cube [lo, hi]: shells ``layers`` deep under
     its surface; each stands for dx^3."""
     lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
-    radius = 0.5 * (hi[0] - lo[0])
-    return np.concatenate([_sphere_shell(r, dx) for r in _radii(radius, dx, layers)]) + 0.5 * (lo + hi), dx ** 3
+    shells = [_sphere_shell(r, dx) for r in _radii(0.5 * (hi[0] - lo[0]), dx, layers)]
+    return np.concatenate(shells) + 0.5 * (lo + hi), dx ** 3
 
 
 def particles(obstacle, dx: float, dim: int, layers: int):
@@ -162,14 +165,13 @@ def holds(obstacle, pts, dim: int, margin: float) -> np.ndarray:
     the place of); a box and a wedge by their box."""
     lo, hi = np.asarray(obstacle.lo, dtype=float), np.asarray(obstacle.hi, dtype=float)
     in_box = np.all((pts[:, :dim] >= lo[:dim]) & (pts[:, :dim] <= hi[:dim]), axis=1)
-    if obstacle.shape in ("box", "wedge"):
+    if obstacle.shape not in ROUND:
         return in_box
-    centre = 0.5 * (lo + hi)
-    d = pts - centre
+    d = pts - 0.5 * (lo + hi)
     if obstacle.shape == "sphere":
-        return np.linalg.norm(d, axis=1) < 0.5 * (hi[0] - lo[0]) + margin
+        return np.linalg.norm(d, axis=1) < radius(obstacle, dim) + margin
     a, b = _across(dim, obstacle.axis)
-    round_ = np.hypot(d[:, a], d[:, b]) < 0.5 * (hi[a] - lo[a]) + margin
+    round_ = np.hypot(d[:, a], d[:, b]) < radius(obstacle, dim) + margin
     if dim == 2:
         return round_
     ax = obstacle.axis
@@ -177,8 +179,8 @@ def holds(obstacle, pts, dim: int, margin: float) -> np.ndarray:
 
 
 def _polygon(xy: np.ndarray):
-    """Area, centroid and second moments about the centroid (<x^2>, <y^2>, <xy> per unit area) of a
-    simple polygon, counter-clockwise (the shoelace sums)."""
+    """Area, centroid and second moments about the centroid (<x^2>, <y^2> per unit area) of a simple
+    polygon, counter-clockwise (the shoelace sums)."""
     x, y = xy[:, 0], xy[:, 1]
     xn, yn = np.roll(x, -1), np.roll(y, -1)
     cross = x * yn - xn * y
@@ -187,8 +189,7 @@ def _polygon(xy: np.ndarray):
     cy = ((y + yn) * cross).sum() / (6.0 * area)
     ixx = ((x * x + x * xn + xn * xn) * cross).sum() / (12.0 * area) - cx * cx
     iyy = ((y * y + y * yn + yn * yn) * cross).sum() / (12.0 * area) - cy * cy
-    ixy = ((x * yn + 2 * x * y + 2 * xn * yn + xn * y) * cross).sum() / (24.0 * area) - cx * cy
-    return area, (cx, cy), (ixx, iyy, ixy)
+    return area, (cx, cy), (ixx, iyy)
 
 
 def wedge_section(lo, hi, dim: int, deadrise: float) -> np.ndarray:
@@ -215,7 +216,7 @@ def solid(obstacle, dim: int) -> Solid:
         return Solid(float(np.prod(size[:dim])), tuple(centre),
                      _diag((b * b + c * c) / 12.0, (a * a + c * c) / 12.0, (a * a + b * b) / 12.0))
     if obstacle.shape == "wedge":
-        area, (cx, cu), (mxx, muu, _) = _polygon(wedge_section(lo, hi, dim, obstacle.deadrise))
+        area, (cx, cu), (mxx, muu) = _polygon(wedge_section(lo, hi, dim, obstacle.deadrise))
         up = dim - 1
         centroid = list(centre)
         centroid[0], centroid[up] = cx, cu
@@ -224,17 +225,17 @@ def solid(obstacle, dim: int) -> Solid:
         length = size[1]
         return Solid(area * length, tuple(centroid),
                      _diag(muu + length ** 2 / 12.0, mxx + muu, mxx + length ** 2 / 12.0))
-    radius = 0.5 * size[0] if obstacle.shape == "sphere" else 0.5 * size[_across(dim, obstacle.axis)[0]]
+    r = radius(obstacle, dim)
     if obstacle.shape == "sphere":
-        m = 0.4 * radius * radius
-        return Solid(4.0 / 3.0 * math.pi * radius ** 3, tuple(centre), _diag(m, m, m))
+        m = 0.4 * r * r
+        return Solid(4.0 / 3.0 * math.pi * r ** 3, tuple(centre), _diag(m, m, m))
     if dim == 2:
-        q = radius * radius / 4.0
-        return Solid(math.pi * radius * radius, tuple(centre), _diag(q, q, 2.0 * q))
+        q = r * r / 4.0
+        return Solid(math.pi * r * r, tuple(centre), _diag(q, q, 2.0 * q))
     length = size[obstacle.axis]
-    moments = [radius * radius / 4.0 + length * length / 12.0] * 3
-    moments[obstacle.axis] = radius * radius / 2.0
-    return Solid(math.pi * radius * radius * length, tuple(centre), _diag(*moments))
+    moments = [r * r / 4.0 + length * length / 12.0] * 3
+    moments[obstacle.axis] = r * r / 2.0
+    return Solid(math.pi * r * r * length, tuple(centre), _diag(*moments))
 
 
 def _diag(a: float, b: float, c: float) -> tuple:
@@ -244,12 +245,10 @@ def _diag(a: float, b: float, c: float) -> tuple:
 def contact(obstacle, dim: int) -> dict:
     """What of a round body meets the tank's walls (bodies.Floating's radius, round_axis and
     half_length); nothing for a box or a wedge, whose box's corners do."""
-    if obstacle.shape not in ("cylinder", "sphere"):
+    if obstacle.shape not in ROUND:
         return {}
-    lo, hi = obstacle.lo, obstacle.hi
     if obstacle.shape == "sphere":
-        return {"radius": 0.5 * (hi[0] - lo[0])}
-    axis = obstacle.axis if dim == 3 else 2
-    radius = 0.5 * (hi[_across(dim, axis)[0]] - lo[_across(dim, axis)[0]])
-    return {"radius": radius, "round_axis": tuple(float(a == axis) for a in range(3)),
-            "half_length": 0.5 * (hi[axis] - lo[axis]) if dim == 3 else 0.0}
+        return {"radius": radius(obstacle, dim)}
+    axis = obstacle.axis  # z for a 2D disc, its length none
+    return {"radius": radius(obstacle, dim), "round_axis": tuple(float(a == axis) for a in range(3)),
+            "half_length": 0.5 * (obstacle.hi[axis] - obstacle.lo[axis]) if dim == 3 else 0.0}
