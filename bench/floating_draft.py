@@ -32,7 +32,7 @@ def main():
     import warp as wp
 
     wp.config.log_level = wp.LOG_WARNING
-    from gpusph_ros.analysis.oscillation import free_decay
+    from gpusph_ros.analysis.oscillation import free_decay, whole_periods
     from gpusph_ros.scenes.build import build
     from gpusph_ros.scenes.schema import parse_scene
     from gpusph_ros.scenes.yaml_input import value
@@ -73,11 +73,9 @@ def main():
         height = solver.body_states()[0]["position"][up]
         rows.append((solver.time, height, level))
     r = np.array(rows)
-    below = r[:, 1] - r[r[:, 0] >= 0.5, 1].mean() < 0.0
-    ups = np.flatnonzero(below[:-1] & ~below[1:])
-    if len(ups) < 2:
-        raise SystemExit(f"{len(ups)} upward crossings by {args.end} s: a longer --end")
-    whole = slice(ups[0] + 1, ups[-1] + 1)
+    whole, crossings = whole_periods(r[:, 0], r[:, 1])
+    if crossings < 2:
+        raise SystemExit(f"{crossings} upward crossings by {args.end} s: a longer --end")
     offset = float((r[whole, 1] - r[whole, 2]).mean())
     if args.shape == "box":
         print(f"draft {0.05 - offset:.5f} m against Archimedes' 0.05 m: {-offset / 0.05 * 100:+.1f}%", end="")

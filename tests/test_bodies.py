@@ -6,6 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from gpusph_ros.analysis.oscillation import whole_periods
 from gpusph_ros.scenes.build import build
 from gpusph_ros.scenes.schema import parse_scene
 from gpusph_ros.sph import Solver
@@ -259,7 +260,7 @@ def test_a_floating_boxs_heave_decays_at_linear_theorys_period():
 def heave(solver, dx: float, end: float = 2.3):
     """A 2D floating body's height and the level far from it (0.05-0.35 m and 0.65-0.95 m from the
     left wall of the 1 m tank: the top particle of each column plus dx/2), every 0.02 s to ``end``,
-    over its whole heave periods (between upward crossings of its mean height after 0.5 s)."""
+    over its whole heave periods (analysis.oscillation.whole_periods)."""
     columns = np.concatenate([np.arange(0.05, 0.35, dx), np.arange(0.65, 0.95, dx)])
     times, heights, levels = [], [], []
     for t in np.arange(0.02, end + 1e-9, 0.02):
@@ -270,12 +271,9 @@ def heave(solver, dx: float, end: float = 2.3):
         levels.append(np.mean([z[(x >= a) & (x < a + dx)].max() + dx / 2 for a in columns]))
         heights.append(solver.body_states()[0]["position"][1])
         times.append(solver.time)
-    times, heights, levels = np.array(times), np.array(heights), np.array(levels)
-    below = heights - heights[times >= 0.5].mean() < 0.0
-    up = np.flatnonzero(below[:-1] & ~below[1:])
-    assert len(up) >= 3
-    whole = slice(up[0] + 1, up[-1] + 1)
-    return heights[whole], levels[whole]
+    whole, crossings = whole_periods(times, heights)
+    assert crossings >= 3
+    return np.array(heights)[whole], np.array(levels)[whole]
 
 
 def floating_disc(radius: float, centre_y: float, density: float, dx: float, **floating):
