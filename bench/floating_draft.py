@@ -1,12 +1,12 @@
-"""A body floating in a still tank against Archimedes: a box (its draft density / rho0 of its
-height), a disc or a sphere of half the water's density (its centre on the level), let go
-``--above`` over that and left to heave. Prints the body's height against the level far from it
-(the top fluid particle of each column outside the middle half of the tank, plus dx/2) every 0.02
-s, and the mean over its whole heave periods (between upward crossings of its mean height after
-0.5 s): the draft's error; and the free decay of its heave from release, fitted with z0 + e^(-zeta
-omega_n t) (a cos omega_d t + b sin omega_d t) (a scan of omega_d and zeta, the rest least squares):
-against the damped period and damping ratio that linear theory's added mass and radiation damping
-give the 2D box (theory/heave.py, data/heave_added_mass/README.md).
+"""A body floating in a still tank against Archimedes: a box (its draft density / rho0 of its height),
+a disc or a sphere of half the water's density (its centre on the level), let go ``--above`` over
+that and left to heave. Prints the body's height against the level far from it (the mean of
+measure.surface.Gauges a spacing apart, beyond the kernel's reach of the walls and of the body's
+box) every 0.02 s, and the mean over its whole heave periods (between upward crossings of its mean
+height after 0.5 s): the draft's error; and the free decay of its heave from release, fitted with z0
++ e^(-zeta omega_n t) (a cos omega_d t + b sin omega_d t) (a scan of omega_d and zeta, the rest
+least squares): against the damped period and damping ratio that linear theory's added mass and
+radiation damping give the 2D box (theory/heave.py, data/heave_added_mass/README.md).
 
     python bench/floating_draft.py --dim 3 --shape box --dx 0.01 [--end 2.0] [--set KEY=VALUE ...]
 """
@@ -33,6 +33,7 @@ def main():
 
     wp.config.log_level = wp.LOG_WARNING
     from gpusph_ros.analysis.oscillation import free_decay, whole_periods
+    from gpusph_ros.measure.surface import Gauges
     from gpusph_ros.scenes.build import build
     from gpusph_ros.scenes.schema import parse_scene
     from gpusph_ros.scenes.yaml_input import value
@@ -58,18 +59,16 @@ def main():
     model = build(scene, dx=dx, **settings)
     solver = Solver(model.config, model.particles)
     print(f"{dim}D {args.shape} of density {density} at dx = {dx} m: {solver.n} particles, {settings}", flush=True)
+    # gauges a spacing apart, beyond the kernel's reach (2h) of the walls and of the body's box
+    reach = 2.0 * model.config.hdx * dx
+    grid = np.arange(reach, width - reach + 1e-9, dx)
+    spots = np.stack(np.meshgrid(*[grid] * up, indexing="ij"), axis=-1).reshape(-1, up)
+    spots = spots[np.abs(spots - width / 2).max(axis=1) >= size / 2 + reach]
+    gauges = Gauges(solver, np.column_stack([spots, np.zeros((len(spots), 3 - up))]), 0.2, 0.45, dx)
     t0, rows = time.perf_counter(), []
     for t in np.arange(0.02, args.end + 1e-9, 0.02):
         solver.advance(float(t))
-        snap = solver.snapshot()
-        fluid = snap["ptype"] == 0
-        pos = snap["pos"][fluid]
-        far = np.any(np.abs(pos[:, :up] - width / 2) > width / 4, axis=1)
-        cells = np.floor(pos[far, :up] / dx).astype(int)
-        keys = cells[:, 0] if dim == 2 else cells[:, 0] * 100000 + cells[:, 1]
-        order = np.lexsort((pos[far, up], keys))
-        last = np.r_[keys[order][1:] != keys[order][:-1], True]
-        level = float(pos[far, up][order][last].mean() + dx / 2)
+        level = float(gauges.elevations().mean())
         height = solver.body_states()[0]["position"][up]
         rows.append((solver.time, height, level))
     r = np.array(rows)

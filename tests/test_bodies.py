@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from gpusph_ros.analysis.oscillation import whole_periods
+from gpusph_ros.measure.surface import Gauges
 from gpusph_ros.scenes.build import build
 from gpusph_ros.scenes.schema import parse_scene
 from gpusph_ros.sph import Solver
@@ -212,11 +213,11 @@ def test_a_floating_box_heaves_about_archimedes_draft():
     """A 2D box 0.2 m wide, 0.1 m tall, of density 500 kg/m^3, let go 1 cm above its draft of
     0.05 m in a 1 m tank of 0.3 m of water, at dx = 1 cm (the draft 5 spacings): it heaves, and its
     draft averaged over its whole heave periods (between upward crossings of its mean height, to
-    2.3 s) is Archimedes' within 2% (measured -1.4%; at dx = 2 cm, 2.5 spacings, -4.3%). The
-    draft is the level far from the box (0.05-0.35 m and 0.65-0.95 m from the left wall: the top
-    particle of each column plus dx/2) less the box's bottom. Its heave period, 0.73-0.99 s from one
-    crossing to the next, is recorded in docs/results/bodies.md, not tested: linear theory needs the
-    section's added mass at that frequency, and in this narrow tank the radiated waves come back."""
+    2.3 s) is Archimedes' within 2% (measured -0.9%; at dx = 2 cm, 2.5 spacings, -2.6%). The
+    draft is the level far from the box (heave(): gauges of the free surface) less the box's bottom.
+    Its heave period, 0.73-0.99 s from one crossing to the next, is recorded in
+    docs/results/bodies.md, not tested: linear theory needs the section's added mass at that
+    frequency, and in this narrow tank the radiated waves come back."""
     dx = 0.01
     model, solver = floating_box((0.4, 0.26), (0.6, 0.36), 500.0, dx)
     assert model.config.motions[0].mass == pytest.approx(10.0)  # kg per metre of depth
@@ -258,17 +259,16 @@ def test_a_floating_boxs_heave_decays_at_linear_theorys_period():
 
 
 def heave(solver, dx: float, end: float = 2.3):
-    """A 2D floating body's height and the level far from it (0.05-0.35 m and 0.65-0.95 m from the
-    left wall of the 1 m tank: the top particle of each column plus dx/2), every 0.02 s to ``end``,
-    over its whole heave periods (analysis.oscillation.whole_periods)."""
-    columns = np.concatenate([np.arange(0.05, 0.35, dx), np.arange(0.65, 0.95, dx)])
+    """A 2D floating body's height and the level far from it (the mean of measure.surface.Gauges
+    every spacing 0.06-0.34 m and 0.66-0.94 m from the 1 m tank's left wall, where the kernel, 2h =
+    2.6 dx, reaches no wall up to dx = 2 cm), every 0.02 s to ``end``, over its whole heave periods
+    (analysis.oscillation.whole_periods)."""
+    columns = np.concatenate([np.arange(0.06, 0.34 + 1e-9, dx), np.arange(0.66, 0.94 + 1e-9, dx)])
+    gauges = Gauges(solver, [(x, 0.0, 0.0) for x in columns], 0.2, 0.4, dx)
     times, heights, levels = [], [], []
     for t in np.arange(0.02, end + 1e-9, 0.02):
         solver.advance(float(t))
-        snap = solver.snapshot()
-        fluid = snap["ptype"] == 0
-        x, z = snap["pos"][fluid, 0], snap["pos"][fluid, 1]
-        levels.append(np.mean([z[(x >= a) & (x < a + dx)].max() + dx / 2 for a in columns]))
+        levels.append(gauges.elevations().mean())
         heights.append(solver.body_states()[0]["position"][1])
         times.append(solver.time)
     whole, crossings = whole_periods(times, heights)
@@ -293,8 +293,8 @@ def test_a_disc_of_half_the_waters_density_floats_half_under():
     """A 2D disc of radius 0.1 m and density 500 kg/m^3 (15.7 kg/m), let go 1 cm above the still
     level, dx = 2 cm (5 spacings a radius): Archimedes puts its centre on the level. Over its whole
     heave periods (between upward crossings of its mean height, to 2.3 s) its centre stands
-    2.2 mm above the level far from it (+-4.9 mm as it heaves; at dx = 1 cm 1.6 mm), held within
-    3% of the radius; it is lined by rings (66 particles), none lost."""
+    1.9 mm above the level far from it (+-4.9 mm as it heaves), held within 3% of the radius; it is
+    lined by rings (66 particles), none lost."""
     dx = 0.02
     model, solver = floating_disc(0.1, 0.31, 500.0, dx)
     assert model.config.motions[0].mass == pytest.approx(500.0 * math.pi * 0.01)
