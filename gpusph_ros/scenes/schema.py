@@ -176,7 +176,7 @@ def _scene_file(name_or_path, field_name: str, chain: tuple):
         raise ConfigError(field_name, str(path),
                           f"a YAML mapping of scene fields (the file holds {type(data).__name__})")
     if "base" not in data:
-        return path, text, data
+        return _series_files(path, text, data)
     base = data["base"]
     if not isinstance(base, str) or base in chain or len(chain) >= MAX_BASES:
         raise ConfigError("base", base, f"the name or path of another scene file, in a chain of at most "
@@ -187,7 +187,58 @@ def _scene_file(name_or_path, field_name: str, chain: tuple):
     merged = {**base_data, **{key: value for key, value in data.items() if key != "base"}}
     merged["name"] = data.get("name", path.stem)
     text = f"# {path.name}: the scene {data['base']} with this file's keys\n" + yaml.safe_dump(merged, sort_keys=False)
-    return path, text, merged
+    return _series_files(path, text, merged)
+
+
+def _series_files(path: Path, text: str, data: dict):
+    """(path, text, data) with each series motion's ``file`` (a CSV beside the scene file, or a
+    path) read into its columns, and the text the scene with them, which a recording then holds
+    whole."""
+    read = []
+    for k, item in enumerate(data.get("obstacles") or []):
+        motion = item.get("motion") if isinstance(item, dict) else None
+        if isinstance(motion, dict) and motion.get("type") == "series" and "file" in motion:
+            where = f"obstacles[{k}].motion.file"
+            name = motion["file"]
+            if not isinstance(name, str) or len(name) > MAX_PATH:
+                raise ConfigError(where, name, f"a path of at most {MAX_PATH} characters")
+            columns = read_series(path.parent / name, where)
+            item["motion"] = {**{key: v for key, v in motion.items() if key != "file"}, **columns}
+            read.append(name)
+    if not read:
+        return path, text, data
+    return path, f"# {path.name} with its series files read in ({', '.join(read)})\n" + \
+        yaml.safe_dump(data, sort_keys=False, default_flow_style=None), data
+
+
+def read_series(path: Path, field_name: str) -> dict:
+    """A series file's columns: CSV text whose first line names them (time and any of x, y, z,
+    angle_deg), then one row of numbers a line; lines starting with # are comments."""
+    if not path.is_file():  # a FIFO or a device would block the read
+        raise ConfigError(field_name, str(path), "a series file (CSV) beside the scene file, or its path")
+    lines = [line for line in yaml_input.read_text(path, field_name, limit=MAX_SERIES_BYTES).splitlines()
+             if line.strip() and not line.lstrip().startswith("#")]
+    if not lines:
+        raise ConfigError(field_name, str(path), "a CSV file: a header naming time and any of "
+                                                 + ", ".join(SERIES_CHANNELS) + ", then rows")
+    names = [n.strip() for n in lines[0].split(",")]
+    if "time" not in names or any(n not in ("time",) + SERIES_CHANNELS for n in names) or len(set(names)) < len(names):
+        raise ConfigError(field_name, str(path), "a header naming time and any of " + ", ".join(SERIES_CHANNELS)
+                                                 + f", each once (it names {_quote(names)})")
+    if len(lines) - 1 > MAX_SERIES_ROWS:
+        raise ConfigError(field_name, str(path), f"at most {MAX_SERIES_ROWS:,} rows ({len(lines) - 1:,})")
+    columns = {n: [] for n in names}
+    for row, line in enumerate(lines[1:], start=2):
+        cells = line.split(",")
+        try:
+            numbers = [float(c) for c in cells]
+        except ValueError:
+            numbers = []
+        if len(numbers) != len(names):
+            raise ConfigError(field_name, str(path), f"{len(names)} numbers a row; line {row} of its data is not")
+        for n, v in zip(names, numbers):
+            columns[n].append(v)
+    return columns
 
 
 # -- field readers: each names the field it reads ------------------------------------------
@@ -370,9 +421,53 @@ MOTION_KEYS = {"translate": ("type", "velocity", "start"),
                "move": ("type", "displacement", "duration", "start"),
                "driven": ("type", "max_speed", "max_acceleration", "max_angular_speed", "max_angular_acceleration",
                           "timeout"),
+               "series": ("type", "time", "x", "y", "z", "angle_deg", "axis", "centre", "file"),
                "piston": ("type", "wave_height", "period", "ramp", "depth"),
                "flap": ("type", "wave_height", "period", "ramp", "depth")}
 DRIVEN_TIMEOUT = 0.5  # [s] of simulated time a command is held before the body is brought to rest
+MAX_SERIES_ROWS = 100_000  # samples of a series: a wavemaker's 10 minutes at 100 Hz is 60,000
+MAX_SERIES_BYTES = 8 << 20  # of a series file: 100,000 rows of five numbers
+SERIES_CHANNELS = ("x", "y", "z", "angle_deg")
+
+
+def _series(where, item, dim) -> tuple:
+    """A series' rows (t, d_x, d_y, d_z, theta [rad]) from its columns: ``time`` [s], rising from 0
+    or later, and any of x, y (and z in 3D) [m] and angle_deg, each as long and 0 in its first row
+    (the body starts where the scene put it)."""
+    if "file" in item:
+        raise ConfigError(f"{where}.file", item["file"], "a series file read from a scene file (gpusph-run "
+                                                         "SCENE.yaml, whose folder it is in); a scene given whole "
+                                                         "carries the columns: time, x, y, z, angle_deg")
+    times = item.get("time")
+    if not isinstance(times, list) or not 2 <= len(times) <= MAX_SERIES_ROWS:
+        raise ConfigError(f"{where}.time", _quote(times), f"a list of 2 to {MAX_SERIES_ROWS:,} times [s]")
+    t = np.array([_number(f"{where}.time[{k}]", v, lo=0.0) for k, v in enumerate(times)])
+    if np.any(np.diff(t) <= 0.0):
+        k = int(np.argmax(np.diff(t) <= 0.0)) + 1
+        raise ConfigError(f"{where}.time[{k}]", float(t[k]), f"a time after the one before ({t[k - 1]:g} s)")
+    given = [c for c in SERIES_CHANNELS if c in item]
+    if not given:
+        raise ConfigError(where, sorted(item), "a series with at least one of " + ", ".join(SERIES_CHANNELS))
+    rows = np.zeros((len(t), 5))
+    rows[:, 0] = t
+    for c in given:
+        if c == "z" and dim == 2:
+            raise ConfigError(f"{where}.z", _quote(item[c]), "no z in 2D: x along the tank, y up")
+        column = item[c]
+        if not isinstance(column, list) or len(column) != len(t):
+            raise ConfigError(f"{where}.{c}", _quote(column), f"a list of {len(t)} numbers, one per time")
+        values = np.array([_number(f"{where}.{c}[{k}]", v) for k, v in enumerate(column)])
+        if values[0] != 0.0:
+            raise ConfigError(f"{where}.{c}[0]", float(values[0]), "0: a series starts where the scene put the body")
+        rows[:, 1 + SERIES_CHANNELS.index(c)] = np.radians(values) if c == "angle_deg" else values
+    return tuple(tuple(float(v) for v in row) for row in rows)
+
+
+def _quote(value):
+    """A long list shortened for a message: its length and first items."""
+    if isinstance(value, list) and len(value) > 4:
+        return f"[{', '.join(map(repr, value[:3]))}, ... ({len(value):,} items)]"
+    return value
 
 
 def _wavemaker(where, item, kind, obstacle, dim, depth, g) -> bodies.Motion:
@@ -397,18 +492,30 @@ def _wavemaker(where, item, kind, obstacle, dim, depth, g) -> bodies.Motion:
                          period=period, ramp=ramp)
 
 
+def _axis(where, item, dim) -> tuple:
+    """A motion's rotation axis: z in 2D (none may be given), ``axis`` in 3D (default z)."""
+    if dim == 2 and "axis" in item:
+        raise ConfigError(f"{where}.axis", item["axis"], "no axis in 2D: a 2D body turns in its plane (about z)")
+    axis = _vector(f"{where}.axis", item.get("axis", [0.0, 0.0, 1.0]), 3) if dim == 3 else (0.0, 0.0, 1.0)
+    if math.hypot(*axis) == 0.0:
+        raise ConfigError(f"{where}.axis", list(axis), "a non-zero vector")
+    return axis
+
+
 def _motion(where, value, obstacle, tank, dim, depth: float, g: float) -> bodies.Motion:
     """An obstacle's prescribed motion (sph/bodies.py): a sinusoid of its displacement and of its
     angle about an axis through ``centre`` (default the box's centre), a move by ``displacement``
-    over ``duration`` (the box must stay in the tank over either's translation), or driven by
+    over ``duration`` (the box must stay in the tank over either's translation), a series of
+    displacements and angles (``time`` and any of x, y, z, angle_deg, or a CSV ``file`` of those
+    columns beside the scene file: _series, bodies.series_table), or driven by
     commands (drive.py) within its limits: max_speed and max_acceleration (required, > 0), the
     angular ones (default 0: it does not turn), and the timeout a command is held."""
     kind = value.get("type") if isinstance(value, dict) else None
     if kind not in bodies.LAWS:
         raise ConfigError(f"{where}.type", kind, "one of " + ", ".join(bodies.LAWS))
     keys = MOTION_KEYS[kind]
-    item = _mapping(where, value, keys, required={"sinusoid": ("type", "period"),
-                                                  "translate": ("type", "velocity")}.get(kind, keys[:3]))
+    item = _mapping(where, value, keys, required={"sinusoid": ("type", "period"), "translate": ("type", "velocity"),
+                                                  "series": ("type",)}.get(kind, keys[:3]))
     if kind == "translate":
         return bodies.Motion(law="translate", centre=obstacle.centre(dim),
                              amplitude=_pad3(_vector(f"{where}.velocity", item["velocity"], dim)),
@@ -423,7 +530,14 @@ def _motion(where, value, obstacle, tank, dim, depth: float, g: float) -> bodies
         return bodies.Motion(law="driven", centre=obstacle.centre(dim), **limits,
                              timeout=_number(f"{where}.timeout", item.get("timeout", DRIVEN_TIMEOUT), lo=0.0,
                                              lo_open=True))
-    if kind == "move":
+    if kind == "series":
+        rows = _series(where, item, dim)
+        axis = _axis(where, item, dim)
+        centre = _pad3(_vector(f"{where}.centre", item["centre"], dim)) if "centre" in item else obstacle.centre(dim)
+        motion = bodies.Motion(law="series", centre=centre, axis=axis, series=rows)
+        value_at, _ = bodies.series_samples(rows)
+        reach = list(zip(value_at[:, :3].min(axis=0), value_at[:, :3].max(axis=0)))
+    elif kind == "move":
         shift = _pad3(_vector(f"{where}.displacement", item["displacement"], dim))
         motion = bodies.Motion(law="move", centre=obstacle.centre(dim), amplitude=shift,
                                duration=_number(f"{where}.duration", item["duration"], lo=0.0, lo_open=True),
@@ -433,11 +547,7 @@ def _motion(where, value, obstacle, tank, dim, depth: float, g: float) -> bodies
         amplitude = _pad3(_vector(f"{where}.amplitude", item.get("amplitude", [0.0] * dim), dim))
         phase = math.radians(_number(f"{where}.phase_deg", item.get("phase_deg", 0.0), lo=-360.0, hi=360.0))
         angle = math.radians(_number(f"{where}.angle_deg", item.get("angle_deg", 0.0), lo=-90.0, hi=90.0))
-        if dim == 2 and "axis" in item:
-            raise ConfigError(f"{where}.axis", item["axis"], "no axis in 2D: a 2D body turns in its plane (about z)")
-        axis = _vector(f"{where}.axis", item.get("axis", [0.0, 0.0, 1.0]), 3) if dim == 3 else (0.0, 0.0, 1.0)
-        if math.hypot(*axis) == 0.0:
-            raise ConfigError(f"{where}.axis", list(axis), "a non-zero vector")
+        axis = _axis(where, item, dim)
         centre = _pad3(_vector(f"{where}.centre", item["centre"], dim)) if "centre" in item else obstacle.centre(dim)
         if not any(amplitude) and angle == 0.0:
             raise ConfigError(where, value, "a sinusoid with a non-zero amplitude or angle_deg")

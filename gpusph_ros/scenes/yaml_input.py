@@ -67,17 +67,17 @@ def parse(text: str, field_name: str, where: str):
         raise ConfigError(field_name, where, f"valid YAML (nested too deep; at most {MAX_DEPTH} levels)") from None
 
 
-def read_text(path: Path, field_name: str) -> str:
-    """The text of the file at ``path``, at most MAX_BYTES of UTF-8."""
+def read_text(path: Path, field_name: str, limit: int = MAX_BYTES) -> str:
+    """The text of the file at ``path``, at most ``limit`` bytes of UTF-8."""
     try:
         size = path.stat().st_size
-        if size > MAX_BYTES:
-            raise ConfigError(field_name, str(path), f"a file of at most {MAX_BYTES // 1024} KiB ({size:,} bytes)")
+        if size > limit:
+            raise ConfigError(field_name, str(path), f"a file of at most {limit // 1024} KiB ({size:,} bytes)")
         data = path.read_bytes()
     except OSError as err:
         raise ConfigError(field_name, str(path), f"a readable file ({err.strerror})") from None
     if b"\0" in data:
-        raise ConfigError(field_name, str(path), "a YAML text file (this one is binary)")
+        raise ConfigError(field_name, str(path), "a text file (this one is binary)")
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as err:

@@ -23,7 +23,12 @@ scene put the body:
   still water at constant speed);
 - ``move``: d = D [s - sin(2 pi s) / (2 pi)], s = (t - start) / duration clamped to [0, 1]: the
   displacement D over the duration, starting and ending at rest with a continuous acceleration
-  (the velocity 1 - cos(2 pi s) times D / duration), no rotation.
+  (the velocity 1 - cos(2 pi s) times D / duration), no rotation;
+- ``series`` (DualSPHysics' ``mvfile`` and ``mvrotfile``): d and theta given at times t_0 < t_1 <
+  ..., both 0 at t_0, between them a clamped cubic spline of each (``series_table``: its velocity 0
+  at t_0 and at the last time, its acceleration continuous between), which the wall's (g - a_w)
+  term needs and straight lines between the samples would make a train of impulses; before t_0 the
+  body stands where the scene put it, after the last time at the last sample, at rest.
 
 A driven body follows segments its driver sets at each output (drive.py: commands from ROS, held
 to the scene's limits): from its pose and velocities at the segment's start t0, constant linear and
@@ -71,10 +76,12 @@ import warp as wp
 from . import health
 from .state import BOUNDARY, DT, T
 
-FIXED, SINUSOID, MOVE, FLOATING, DRIVEN, TRANSLATE = 0, 1, 2, 3, 4, 5
+FIXED, SINUSOID, MOVE, FLOATING, DRIVEN, TRANSLATE, SERIES = 0, 1, 2, 3, 4, 5, 6
 # the scene's ``motion.type`` (piston, flap: a sinusoid)
-LAWS = ("translate", "sinusoid", "move", "driven", "piston", "flap")
-LAW_ID = {"translate": TRANSLATE, "sinusoid": SINUSOID, "move": MOVE, "driven": DRIVEN}
+LAWS = ("translate", "sinusoid", "move", "series", "driven", "piston", "flap")
+LAW_ID = {"translate": TRANSLATE, "sinusoid": SINUSOID, "move": MOVE, "driven": DRIVEN, "series": SERIES}
+CHANNELS = 4  # a series' d_x, d_y, d_z and theta
+SERIES_COLUMNS = 1 + 4 * CHANNELS  # a row of series_table: t_k, then each channel's cubic on [t_k, t_k+1]
 
 
 @dataclass(frozen=True)
@@ -98,6 +105,8 @@ class Motion:
     max_angular_speed: float = 0.0
     max_angular_acceleration: float = 0.0
     timeout: float = 0.0
+    # series: rows (t, d_x, d_y, d_z, theta) [s, m, rad], d and theta 0 in the first
+    series: tuple = ()
 
     def peak_speed(self, reach: float) -> float:
         """The largest speed [m/s] of a particle at most ``reach`` [m] from the centre: what the
@@ -108,6 +117,9 @@ class Motion:
             return self.max_speed + self.max_angular_speed * reach
         if self.law == "move":
             return 2.0 * float(np.linalg.norm(self.amplitude)) / self.duration
+        if self.law == "series":
+            _, rate = series_samples(self.series)
+            return float((np.linalg.norm(rate[:, :3], axis=1) + np.abs(rate[:, 3]) * reach).max())
         omega = 2.0 * math.pi / self.period
         return omega * (float(np.linalg.norm(self.amplitude)) + abs(self.angle) * reach)
 
@@ -134,6 +146,69 @@ class Floating:
     radius: float = 0.0
     round_axis: tuple = (0.0, 0.0, 0.0)
     half_length: float = 0.0
+
+
+def clamped_spline(t, y) -> np.ndarray:
+    """The cubic spline through (t_k, y_k) with y' = 0 at both ends, C2 between (de Boor, A
+    Practical Guide to Splines, ch. 4): (k - 1, 4) coefficients (a, b, c, d) of a + b s + c s^2 + d
+    s^3, s = t - t_k, on each interval."""
+    t, y = np.asarray(t, dtype=np.float64), np.asarray(y, dtype=np.float64)
+    h = np.diff(t)
+    n = len(t)
+    # the second derivatives' system: h_(k-1) m_(k-1) + 2 (h_(k-1) + h_k) m_k + h_k m_(k+1) = 6 (slope_k - slope_(k-1)),
+    # the clamped ends 2 h_0 m_0 + h_0 m_1 = 6 slope_0 and h m_(n-2) + 2 h m_(n-1) = -6 slope_(n-2)
+    slope = np.diff(y) / h
+    diag, upper, lower, rhs = np.zeros(n), np.zeros(n - 1), np.zeros(n - 1), np.zeros(n)
+    diag[0], upper[0], rhs[0] = 2.0 * h[0], h[0], 6.0 * slope[0]
+    diag[-1], lower[-1], rhs[-1] = 2.0 * h[-1], h[-1], -6.0 * slope[-1]
+    diag[1:-1] = 2.0 * (h[:-1] + h[1:])
+    upper[1:], lower[:-1] = h[1:], h[:-1]
+    rhs[1:-1] = 6.0 * np.diff(slope)
+    for k in range(1, n):  # Thomas' elimination: a tridiagonal, diagonally dominant system
+        w = lower[k - 1] / diag[k - 1]
+        diag[k] -= w * upper[k - 1]
+        rhs[k] -= w * rhs[k - 1]
+    m = np.zeros(n)
+    m[-1] = rhs[-1] / diag[-1]
+    for k in range(n - 2, -1, -1):
+        m[k] = (rhs[k] - upper[k] * m[k + 1]) / diag[k]
+    return np.column_stack([y[:-1], slope - h * (2.0 * m[:-1] + m[1:]) / 6.0, m[:-1] / 2.0,
+                            (m[1:] - m[:-1]) / (6.0 * h)])
+
+
+def series_table(motions: list) -> np.ndarray:
+    """The series laws' rows, body after body (Law.first, Law.count): t_k and each channel's
+    clamped_spline coefficients on [t_k, t_k+1]; the last row of a body its last sample, held. At
+    least one row."""
+    rows = [np.zeros((1, SERIES_COLUMNS))]
+    for m in motions:
+        if isinstance(m, Motion) and m.law == "series":
+            data = np.asarray(m.series, dtype=np.float64)
+            block = np.zeros((len(data), SERIES_COLUMNS))
+            block[:, 0] = data[:, 0]
+            for c in range(CHANNELS):
+                block[:-1, 1 + 4 * c:5 + 4 * c] = clamped_spline(data[:, 0], data[:, 1 + c])
+                block[-1, 1 + 4 * c] = data[-1, 1 + c]
+            rows.append(block)
+    return np.concatenate(rows[1:] or rows)
+
+
+def series_samples(series, per_interval: int = 8):
+    """(d and theta, their rates) of a series' spline at ``per_interval`` points of each interval
+    and its ends, (k, 4) each: where the spline reaches and how fast, which its samples alone do
+    not say (a cubic overshoots them)."""
+    table = series_table([Motion(law="series", series=series)])
+    s = np.linspace(0.0, 1.0, per_interval, endpoint=False)
+    value, rate = [], []
+    for k in range(len(table) - 1):
+        tau = s * (table[k + 1, 0] - table[k, 0])
+        coef = table[k, 1:].reshape(CHANNELS, 4)
+        value.append(coef[:, 0] + np.outer(tau, coef[:, 1]) + np.outer(tau ** 2, coef[:, 2])
+                     + np.outer(tau ** 3, coef[:, 3]))
+        rate.append(coef[:, 1] + np.outer(2.0 * tau, coef[:, 2]) + np.outer(3.0 * tau ** 2, coef[:, 3]))
+    value.append(table[-1:, 1::4])
+    rate.append(np.zeros((1, CHANNELS)))
+    return np.concatenate(value), np.concatenate(rate)
 
 
 def quaternion_matrix(q) -> np.ndarray:
@@ -174,6 +249,8 @@ def build(scalar):
         half_length: wp.float64
         ext_force: wp.vec3d  # floating: an external force and torque about its centre of mass (world)
         ext_torque: wp.vec3d
+        first: int  # series: its rows in the series table
+        count: int
         t0: wp.float64  # driven: the segment's start, pose, velocities and constant accelerations
         x0: wp.vec3d
         q0: wp.quatd
@@ -262,6 +339,45 @@ def build(scalar):
         pose.w = law.axis * (law.angle * f[1])
         pose.a = law.amplitude * f[2]
         pose.alpha = law.axis * (law.angle * f[2])
+        return pose
+
+    @wp.func
+    def series_pose(law: Law, table: wp.array2d(dtype=wp.float64), t: wp.float64) -> Pose:
+        """A series body on its splines (series_table): the interval holding t found by bisection;
+        before the first time its first row, after the last its last, at rest."""
+        lo = law.first
+        hi = law.first + law.count - 1
+        tau = wp.float64(0.0)
+        if t <= table[lo, 0]:
+            hi = lo
+        elif t >= table[hi, 0]:
+            lo = hi
+        else:
+            while hi - lo > 1:
+                mid = (lo + hi) // 2
+                if table[mid, 0] <= t:
+                    lo = mid
+                else:
+                    hi = mid
+            tau = t - table[lo, 0]
+        value = wp.vec4d()
+        rate = wp.vec4d()
+        accel = wp.vec4d()
+        for c in range(CHANNELS):
+            a = table[lo, 1 + 4 * c]
+            b = table[lo, 2 + 4 * c]
+            cc = table[lo, 3 + 4 * c]
+            d = table[lo, 4 + 4 * c]
+            value[c] = a + tau * (b + tau * (cc + tau * d))
+            rate[c] = b + tau * (wp.float64(2.0) * cc + wp.float64(3.0) * tau * d)
+            accel[c] = wp.float64(2.0) * cc + wp.float64(6.0) * tau * d
+        pose = Pose()
+        pose.x = law.centre + wp.vec3d(value[0], value[1], value[2])
+        pose.q = wp.quat_from_axis_angle(law.axis, value[3])
+        pose.v = wp.vec3d(rate[0], rate[1], rate[2])
+        pose.w = law.axis * rate[3]
+        pose.a = wp.vec3d(accel[0], accel[1], accel[2])
+        pose.alpha = law.axis * accel[3]
         return pose
 
     @wp.func
@@ -477,7 +593,8 @@ def build(scalar):
                 poses[b] = pb
 
     @wp.kernel(enable_backward=False, module="unique")
-    def body_poses(laws: wp.array(dtype=Law), clock: wp.array(dtype=wp.float64), factor: wp.float64,
+    def body_poses(laws: wp.array(dtype=Law), series: wp.array2d(dtype=wp.float64), clock: wp.array(dtype=wp.float64),
+                   factor: wp.float64,
                    gravity: wp.vec3d, wall_lo: wp.vec3d, wall_hi: wp.vec3d, solid_lo: wp.array(dtype=wp.vec3d),
                    solid_hi: wp.array(dtype=wp.vec3d), n_solids: int, base: wp.array(dtype=Rigid),
                    rates_at: wp.array(dtype=Rigid), sums: wp.array2d(dtype=wp.vec3d), out: wp.array(dtype=Rigid),
@@ -491,6 +608,9 @@ def build(scalar):
         t = clock[T] + factor * clock[DT]
         if law.kind == SINUSOID or law.kind == MOVE or law.kind == TRANSLATE:
             poses[b] = prescribed_pose(law, t)
+            return
+        if law.kind == SERIES:
+            poses[b] = series_pose(law, series, t)
             return
         if law.kind == DRIVEN:
             poses[b] = driven_pose(law, t)
@@ -598,7 +718,7 @@ def build(scalar):
 
     def law_list(motions: list) -> list:
         """The Law of each of ``motions`` by body id (None: fixed), at least one."""
-        table = []
+        table, first = [], 0
         for m in motions or [None]:
             law = Law()
             law.kind = FIXED
@@ -615,6 +735,9 @@ def build(scalar):
                 law.axis = wp.vec3d(*(axis / np.linalg.norm(axis)))
                 law.start, law.duration, law.ramp = m.start, m.duration, m.ramp
                 law.x0 = law.centre  # a driven body stands where the scene put it until driven
+                if m.law == "series":
+                    law.first, law.count = first, len(m.series)
+                    first += len(m.series)
             elif isinstance(m, Floating):
                 inertia = np.asarray(m.inertia, dtype=np.float64)
                 # a 2D body's only inertia is about z: the others are set to 1 and their axes held

@@ -168,6 +168,7 @@ class Solver:
             B = bodies.build(s)
             self._law_list = B.law_list(cfg.motions)  # the host's copy, which drive() changes
             self._laws = wp.array(self._law_list, dtype=B.Law, device=dev)
+            self._series = wp.array(bodies.series_table(cfg.motions), dtype=wp.float64, device=dev)
             self._rest = arr(np.asarray(particles.pos, dtype=np.float64), wp.vec3d)
             nb = len(cfg.motions)
             self._poses = wp.zeros(nb, dtype=B.Pose, device=dev)
@@ -330,7 +331,7 @@ class Solver:
         base, rates_at, out = [(self._rigid, self._rigid, self._rigid), (self._rigid, self._rigid, self._rigid_h),
                                (self._rigid, self._rigid_h, self._rigid_c)][into]
         wp.launch(B.body_poses, dim=len(self.config.motions),
-                  inputs=[self._laws, self._clock, factor, self._gravity64, self._walls64[0], self._walls64[1],
+                  inputs=[self._laws, self._series, self._clock, factor, self._gravity64, *self._walls64,
                           *self._solids64, len(self.config.solids), base, rates_at, self._body_sums, out, self._poses],
                   device=dev)
         if self._pairs:
