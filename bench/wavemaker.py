@@ -4,16 +4,15 @@ modes), against H of the scene's motion, at the paddle's period.
 
 A flume ``--length`` long with ``--depth`` of water; the paddle's amplitude ramps in over two
 periods. Each gauge's elevation is fitted, over the window after the ramp and the wave's arrival
-(group velocity) and before the far wall's reflection can return, with a sinusoid at the paddle's
-period (least squares: mean, sine and cosine): H = 2 x its amplitude; the period is the fitted
-sinusoid's by a scan of periods around the paddle's. One row per run is appended to ``--out`` as it
-ends; a run already there is skipped.
+(group velocity) and before the far wall's reflection can return (at sqrt(g h): analysis.waves),
+with a sinusoid at the paddle's period (least squares: mean, sine and cosine): H = 2 x its
+amplitude; the period is the fitted sinusoid's by a scan of periods around the paddle's. One row per
+run is appended to ``--out`` as it ends; a run already there is skipped.
 
     python bench/wavemaker.py --period 1.0 2.0 [--kind piston|flap] [--dx 0.02] [--set alpha=0.01]
 """
 import argparse
 import csv
-import math
 import time
 from pathlib import Path
 
@@ -24,13 +23,6 @@ import csv_rows
 REPO = Path(__file__).resolve().parents[1]
 FIELDS = ["kind", "period", "depth", "wave_height", "kh", "dx", "settings", "particles", "wall_s", "window",
           "H_g1", "H_g2", "H_g3", "err_g1_pct", "err_g2_pct", "err_g3_pct", "period_fit", "excluded"]
-
-
-def fit(t, eta, omega):
-    """Amplitude of the sinusoid at omega fitted to eta(t) with its mean, and the residual's RMS."""
-    a = np.column_stack([np.ones_like(t), np.sin(omega * t), np.cos(omega * t)])
-    coef, *_ = np.linalg.lstsq(a, eta, rcond=None)
-    return math.hypot(coef[1], coef[2]), float(np.sqrt(np.mean((eta - a @ coef) ** 2)))
 
 
 def main():
@@ -47,8 +39,9 @@ def main():
     import warp as wp
 
     wp.config.log_level = wp.LOG_WARNING
+    from gpusph_ros.analysis import waves
     from gpusph_ros.runner import Run
-    from gpusph_ros.scenes.schema import parse_scene
+    from gpusph_ros.scenes.flume import PADDLE, wave_flume
     from gpusph_ros.scenes.settings import resolve
     from gpusph_ros.theory import wavemaker
 
@@ -58,27 +51,17 @@ def main():
             done = {(r["kind"], float(r["period"]), float(r["dx"]), r["settings"]) for r in csv.DictReader(f)}
     settings = " ".join(args.set)
     h, g = args.depth, 9.81
-    gauges = [0.1 + 2 * h, 0.1 + 3 * h, 0.1 + 4 * h]
+    gauges = [2 * h, 3 * h, 4 * h]  # from the paddle's face
     for period in args.period:
         if (args.kind, period, args.dx, settings) in done:
             print(f"{args.kind} T = {period} s: already in {args.out}")
             continue
-        k = wavemaker.wavenumber(period, h, g)
-        kh = k * h
-        c = 2 * math.pi / period / k
-        cg = c * 0.5 * (1 + 2 * kh / math.sinh(2 * kh))
-        ramp = 2 * period
-        start = ramp + gauges[-1] / cg + period  # the ramp's end reaches the last gauge
-        end = (2 * args.length - gauges[-1]) / cg  # the far wall's reflection of the front reaches it
+        kh = wavemaker.wavenumber(period, h, g) * h
+        start, end = waves.steady_window(period, h, gauges[-1], args.length - PADDLE[1], 2 * period, g)
         if start >= end - period:
             raise SystemExit(f"T = {period} s: no whole period between the ramp's arrival at the last gauge "
                              f"({start:.2f} s) and the reflection's ({end:.2f} s); a longer --length")
-        scene = parse_scene({
-            "name": "flume", "dim": 2, "tank": [args.length, 2 * h], "depth": h, "walls": "particles",
-            "fluid": [{"name": "water", "lo": [0.1, 0.0], "hi": [args.length, h]}],
-            "obstacles": [{"name": "paddle", "lo": [0.04, 0.0], "hi": [0.1, 2 * h],
-                           "motion": {"type": args.kind, "wave_height": args.height, "period": period}}],
-            "probes": {f"g{n + 1}": {"type": "gauge", "position": [x]} for n, x in enumerate(gauges)}})
+        scene = wave_flume(args.length, h, period, args.height, gauges, kind=args.kind)
         run = Run(scene, resolve(scene, sets=[f"dx={args.dx}", f"end_time={end:.3f}", "output_rate=50",
                                              *args.set]))
         print(f"{args.kind} T = {period} s, kh = {kh:.3f}, H = {args.height} m: {run.summary()}; window "
@@ -94,10 +77,8 @@ def main():
         wall = time.perf_counter() - t0
         times, levels = np.array(times), np.array(levels)
         window = (times >= start) & (times <= end)
-        omega = 2 * math.pi / period
-        heights = [2 * fit(times[window], levels[window, n], omega)[0] for n in range(3)]
-        scan = np.linspace(0.9 * period, 1.1 * period, 201)
-        period_fit = float(scan[np.argmin([fit(times[window], levels[window, 0], 2 * math.pi / p)[1] for p in scan])])
+        heights = [2 * waves.sinusoid(times[window], levels[window, n], period)[0] for n in range(3)]
+        period_fit = waves.period_of(times[window], levels[window, 0], period)
         row = {"kind": args.kind, "period": period, "depth": h, "wave_height": args.height, "kh": round(kh, 4),
                "dx": args.dx, "settings": settings, "particles": run.solver.n, "wall_s": round(wall, 1),
                "window": f"{start:.2f}-{end:.2f}", **{f"H_g{n + 1}": round(v, 5) for n, v in enumerate(heights)},

@@ -448,7 +448,8 @@ def test_fixed_bodies_go_on_tf_static_and_moving_ones_on_tf(monkeypatch):
 @pytest.mark.unit
 def test_linear_wavemaker_theory_has_its_limits_and_its_dispersion():
     """Biesel's H/S: a piston's tends to kh in shallow water and 2 in deep water, a flap's to kh/2 and
-    2 (Dean & Dalrymple 1991, Fig. 6.4); the wavenumber satisfies omega^2 = g k tanh(kh)."""
+    2 (Dean & Dalrymple 1991, Fig. 6.4); the wavenumber satisfies omega^2 = g k tanh(kh); the group
+    velocity tends to sqrt(g h) in shallow water and to half the phase speed g T / (2 pi) in deep."""
     from gpusph_ros.theory import wavemaker
 
     assert wavemaker.piston_ratio(1e-3) == pytest.approx(1e-3, rel=1e-3)
@@ -458,6 +459,8 @@ def test_linear_wavemaker_theory_has_its_limits_and_its_dispersion():
     for period, depth in ((1.0, 0.4), (2.0, 0.4), (8.0, 10.0)):
         k = wavemaker.wavenumber(period, depth)
         assert (2 * math.pi / period) ** 2 == pytest.approx(9.81 * k * math.tanh(k * depth), rel=1e-12)
+    assert wavemaker.group_velocity(200.0, 0.4) == pytest.approx(math.sqrt(9.81 * 0.4), rel=1e-3)
+    assert wavemaker.group_velocity(1.0, 50.0) == pytest.approx(9.81 / (4 * math.pi), rel=1e-9)
 
 
 @pytest.mark.physics

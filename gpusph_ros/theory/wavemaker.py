@@ -37,3 +37,11 @@ def flap_ratio(kh: float) -> float:
     """H / S of a flap hinged at the bed, S its stroke at the still water level (Biesel)."""
     return (4.0 * math.sinh(kh) / kh * (kh * math.sinh(kh) - math.cosh(kh) + 1.0)
             / (math.sinh(2.0 * kh) + 2.0 * kh))
+
+
+def group_velocity(period: float, depth: float, g: float = 9.81) -> float:
+    """c_g [m/s] = c (1 + 2kh / sinh 2kh) / 2 (Dean & Dalrymple Eq. 4.77): the speed a wave train's
+    energy, and its front, travels at."""
+    k = wavenumber(period, depth, g)
+    kh = k * depth
+    return 2.0 * math.pi / period / k * 0.5 * (1.0 + 2.0 * kh / math.sinh(2.0 * kh))
