@@ -103,7 +103,7 @@ def bad_file(tmp_path, text: str):
     (lambda law, p: bad_file(p, "time,x,speed\n0,0,0\n"), "obstacles[0].motion.file", "a header naming time"),
     (lambda law, p: bad_file(p, "time,x\n0,0\n1,0.1,3\n"), "obstacles[0].motion.file", "line 3 of its data"),
     (lambda law, p: bad_file(p, ""), "obstacles[0].motion.file", "a CSV file"),
-    (lambda law, p: {"type": "series", "file": str(p / "none.csv")}, "obstacles[0].motion.file", "a series file"),
+    (lambda law, p: {"type": "series", "file": str(p / "none.csv")}, "obstacles[0].motion.file", "a CSV file beside"),
 ])
 def test_a_bad_series_is_refused_naming_its_field(tmp_path, change, field, allowed):
     """Each refusal names the field and what it allows; a file is read only from a scene file."""

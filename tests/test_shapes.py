@@ -83,7 +83,7 @@ def test_a_round_body_is_lined_a_spacing_apart_under_its_surface(shape, lo, hi, 
 @pytest.mark.unit
 @pytest.mark.parametrize("shape, lo, hi, dim, more, field, allowed", [
     ("cylinder", [0.4, 0.4], [0.6, 0.7], 2, {}, "obstacles[0].hi", "a box as wide along x, y"),
-    ("sphere", [0.4, 0.4], [0.6, 0.6], 2, {}, "obstacles[0].shape", "box, wedge or cylinder in 2D"),
+    ("sphere", [0.4, 0.4], [0.6, 0.6], 2, {}, "obstacles[0].shape", "box, wedge, cylinder or points in 2D"),
     ("cylinder", [0.4, 0.3, 0.4], [0.6, 0.7, 0.6], 3, {}, "obstacles[0].axis", "one of x, y, z"),
     ("cylinder", [0.4, 0.3, 0.4], [0.6, 0.7, 0.6], 3, {"axis": "w"}, "obstacles[0].axis", "one of x, y, z"),
     ("cylinder", [0.4, 0.3, 0.4], [0.6, 0.7, 0.6], 3, {"axis": "x"}, "obstacles[0].hi", "along y, z"),

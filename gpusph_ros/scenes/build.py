@@ -21,6 +21,9 @@ from . import reduce, refine, resources, shapes
 from .boxes import box_tank
 from .schema import Scene
 
+# a points body's median spacing over the run's dx: its particles each stand for dx^dim
+POINTS_SPACING = (0.8, 1.25)
+
 
 @dataclass
 class Model:
@@ -169,6 +172,12 @@ def build_from(scene: Scene, cfg: SolverConfig) -> Model:
         if o.motion is None and o.shape == "box":
             solids.append((o.lo, o.hi))
         block, volume = shapes.particles(o, dx, dim, layers)
+        if o.shape == "points":  # each stands for dx^dim: they must be a spacing apart
+            apart = shapes.median_spacing(block, dim)
+            if not POINTS_SPACING[0] * dx <= apart <= POINTS_SPACING[1] * dx:
+                raise ConfigError(f"obstacles[{k}].points", o.name, f"points the run's spacing apart (dx = {dx:g} m, "
+                                                                    f"within {POINTS_SPACING} of it); their median "
+                                                                    f"spacing is {apart:.4g} m")
         pos.append(block)
         rho.append(np.full(len(block), cfg.rho0))  # mostly dry at the start; dynamic ones adjust
         mass.append(np.full(len(block), cfg.rho0 * volume))

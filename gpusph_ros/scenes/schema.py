@@ -68,6 +68,7 @@ class Obstacle(Box):
     shape: str = "box"  # shapes.SHAPES: a wedge rises at ``deadrise`` [rad], a cylinder turns about ``axis``
     deadrise: float = 0.0
     axis: int = 2  # 0, 1, 2: x, y, z (2D: z, the disc's)
+    points: tuple = ()  # shape points: its boundary particles, 3-tuples in the scene's axes [m]
 
     def centre(self, dim: int) -> tuple:
         """The body's reference point, the centre of its box (z = 0 in 2D): its torque is about it."""
@@ -191,54 +192,58 @@ def _scene_file(name_or_path, field_name: str, chain: tuple):
 
 
 def _series_files(path: Path, text: str, data: dict):
-    """(path, text, data) with each series motion's ``file`` (a CSV beside the scene file, or a
-    path) read into its columns, and the text the scene with them, which a recording then holds
-    whole."""
+    """(path, text, data) with each obstacle's points ``file`` and each series motion's ``file``
+    (a CSV beside the scene file, or a path) read into its columns, and the text the scene with
+    them, which a recording then holds whole."""
     read = []
     for k, item in enumerate(data.get("obstacles") or []):
-        motion = item.get("motion") if isinstance(item, dict) else None
+        if not isinstance(item, dict):
+            continue
+        motion = item.get("motion")
         if isinstance(motion, dict) and motion.get("type") == "series" and "file" in motion:
-            where = f"obstacles[{k}].motion.file"
-            name = motion["file"]
-            if not isinstance(name, str) or len(name) > MAX_PATH:
-                raise ConfigError(where, name, f"a path of at most {MAX_PATH} characters")
-            columns = read_series(path.parent / name, where)
+            columns = read_columns(path, motion["file"], f"obstacles[{k}].motion.file", SERIES_CHANNELS, "time")
             item["motion"] = {**{key: v for key, v in motion.items() if key != "file"}, **columns}
-            read.append(name)
+            read.append(motion["file"])
+        if item.get("shape") == "points" and "file" in item:
+            item["points"] = read_columns(path, item.pop("file"), f"obstacles[{k}].file", POINT_COLUMNS, "x")
+            read.append(f"obstacles[{k}]'s points")
     if not read:
         return path, text, data
-    return path, f"# {path.name} with its series files read in ({', '.join(read)})\n" + \
+    return path, f"# {path.name} with its files read in ({', '.join(map(str, read))})\n" + \
         yaml.safe_dump(data, sort_keys=False, default_flow_style=None), data
 
 
-def read_series(path: Path, field_name: str) -> dict:
-    """A series file's columns: CSV text whose first line names them (time and any of x, y, z,
-    angle_deg), then one row of numbers a line; lines starting with # are comments."""
+def read_columns(scene_path: Path, name, field_name: str, columns: tuple, first: str) -> dict:
+    """A CSV file's columns (``name`` beside the scene file at ``scene_path``, or a path): text whose
+    first line names them (``first`` and any of ``columns``, each once), then one row of numbers a
+    line; lines starting with # are comments."""
+    if not isinstance(name, str) or len(name) > MAX_PATH:
+        raise ConfigError(field_name, name, f"a path of at most {MAX_PATH} characters")
+    path = scene_path.parent / name
     if not path.is_file():  # a FIFO or a device would block the read
-        raise ConfigError(field_name, str(path), "a series file (CSV) beside the scene file, or its path")
-    lines = [line for line in yaml_input.read_text(path, field_name, limit=MAX_SERIES_BYTES).splitlines()
+        raise ConfigError(field_name, str(path), "a CSV file beside the scene file, or its path")
+    lines = [line for line in yaml_input.read_text(path, field_name, limit=MAX_CSV_BYTES).splitlines()
              if line.strip() and not line.lstrip().startswith("#")]
+    allowed = (first,) + tuple(c for c in columns if c != first)
     if not lines:
-        raise ConfigError(field_name, str(path), "a CSV file: a header naming time and any of "
-                                                 + ", ".join(SERIES_CHANNELS) + ", then rows")
+        raise ConfigError(field_name, str(path), "a CSV file: a header naming " + ", ".join(allowed) + ", then rows")
     names = [n.strip() for n in lines[0].split(",")]
-    if "time" not in names or any(n not in ("time",) + SERIES_CHANNELS for n in names) or len(set(names)) < len(names):
-        raise ConfigError(field_name, str(path), "a header naming time and any of " + ", ".join(SERIES_CHANNELS)
+    if first not in names or any(n not in allowed for n in names) or len(set(names)) < len(names):
+        raise ConfigError(field_name, str(path), f"a header naming {first} and any of " + ", ".join(allowed[1:])
                                                  + f", each once (it names {_quote(names)})")
-    if len(lines) - 1 > MAX_SERIES_ROWS:
-        raise ConfigError(field_name, str(path), f"at most {MAX_SERIES_ROWS:,} rows ({len(lines) - 1:,})")
-    columns = {n: [] for n in names}
+    if len(lines) - 1 > MAX_CSV_ROWS:
+        raise ConfigError(field_name, str(path), f"at most {MAX_CSV_ROWS:,} rows ({len(lines) - 1:,})")
+    values = {n: [] for n in names}
     for row, line in enumerate(lines[1:], start=2):
-        cells = line.split(",")
         try:
-            numbers = [float(c) for c in cells]
+            numbers = [float(c) for c in line.split(",")]
         except ValueError:
             numbers = []
         if len(numbers) != len(names):
             raise ConfigError(field_name, str(path), f"{len(names)} numbers a row; line {row} of its data is not")
         for n, v in zip(names, numbers):
-            columns[n].append(v)
-    return columns
+            values[n].append(v)
+    return values
 
 
 # -- field readers: each names the field it reads ------------------------------------------
@@ -362,14 +367,15 @@ def _obstacles(items, tank, dim, depth: float, g: float) -> list:
         where = f"obstacles[{k}]"
         item, name, lo, hi = _box(where, item, tank, dim,
                                   extra_keys=("block_offsets", "displaces_fluid", "motion", "floating", "shape",
-                                              "deadrise_deg", "axis"))
+                                              "deadrise_deg", "axis", "points", "file"))
         offsets = item.get("block_offsets", [0.0, 0.06])
         if not isinstance(offsets, list):
             raise ConfigError(f"{where}.block_offsets", offsets, "a list of distances >= 0 [m]")
         offsets = tuple(_number(f"{where}.block_offsets[{j}]", o, lo=0.0) for j, o in enumerate(offsets))
-        if lo[up] > 0.0 and item.get("floating") is None and item.get("motion") is None:
+        if lo[up] > 0.0 and item.get("floating") is None and item.get("motion") is None and \
+                item.get("shape") != "points":
             raise ConfigError(f"{where}.lo", list(lo[:dim]), "a box standing on the floor (lo on the vertical axis "
-                                                             "0), unless it floats or moves")
+                                                             "0), unless it floats or moves or is given as points")
         displaces = item.get("displaces_fluid", False)
         if not isinstance(displaces, bool):
             raise ConfigError(f"{where}.displaces_fluid", displaces, "true or false")
@@ -399,8 +405,14 @@ def _shape(where, item, obstacle, dim):
         raise ConfigError(f"{where}.axis", item.get("axis"), "the cylinder's axis, one of x, y, z, for shape: "
                                                             "cylinder in 3D only (a 2D cylinder is a disc)")
     if shape == "sphere" and dim == 2:
-        raise ConfigError(f"{where}.shape", shape, "box, wedge or cylinder in 2D (a 2D cylinder is a disc)")
+        raise ConfigError(f"{where}.shape", shape, "box, wedge, cylinder or points in 2D (a 2D cylinder is a disc)")
+    if (shape == "points") != ("points" in item or "file" in item):
+        raise ConfigError(f"{where}.points", item.get("points", item.get("file")),
+                          "the body's particles (points, or a CSV file of them beside the scene file), for shape: "
+                          "points only")
     obstacle.shape = shape
+    if shape == "points":
+        obstacle.points = _points(where, item, obstacle, dim)
     if shape == "wedge":
         obstacle.deadrise = math.radians(_number(f"{where}.deadrise_deg", item["deadrise_deg"], lo=1.0, hi=80.0))
     if "axis" in item:
@@ -416,6 +428,35 @@ def _shape(where, item, obstacle, dim):
                                                                       f"is inscribed in it); it is {sizes}")
 
 
+MAX_POINTS = 500_000  # of a points body: more than every other particle of most scenes
+MAX_CSV_ROWS = MAX_POINTS  # of a series or points file
+MAX_CSV_BYTES = 32 << 20  # of such a file: 500,000 rows of three numbers
+POINT_COLUMNS = ("x", "y", "z")
+
+
+def _points(where, item, obstacle, dim) -> tuple:
+    """A points body's particles: ``points``, each [x, y(, z)] [m] in the scene's axes inside its
+    box (which stays its extent: what it meets, what it displaces, how it is drawn); each stands
+    for dx^dim, so they are a spacing apart (build checks them against the run's dx)."""
+    if "file" in item:
+        raise ConfigError(f"{where}.file", item["file"], "a points file read from a scene file (gpusph-run "
+                                                         "SCENE.yaml, whose folder it is in); a scene given whole "
+                                                         "carries the points")
+    pts = item["points"]
+    if isinstance(pts, dict):  # a file's columns
+        pts = [list(row) for row in zip(*(pts.get(c, []) for c in POINT_COLUMNS[:dim]))]
+    if not isinstance(pts, list) or not 1 <= len(pts) <= MAX_POINTS:
+        raise ConfigError(f"{where}.points", _quote(pts), f"a list of 1 to {MAX_POINTS:,} points [x, y(, z)] [m]")
+    rows = np.array([_vector(f"{where}.points[{k}]", p, dim) for k, p in enumerate(pts)])
+    lo, hi = np.asarray(obstacle.lo[:dim]), np.asarray(obstacle.hi[:dim])
+    outside = np.any((rows < lo) | (rows > hi), axis=1)
+    if outside.any():
+        k = int(np.argmax(outside))
+        raise ConfigError(f"{where}.points[{k}]", rows[k].tolist(), f"a point inside the body's box [{lo.tolist()}, "
+                                                                    f"{hi.tolist()}]")
+    return tuple(tuple(float(c) for c in row) + (0.0,) * (3 - dim) for row in rows)
+
+
 MOTION_KEYS = {"translate": ("type", "velocity", "start"),
                "sinusoid": ("type", "amplitude", "period", "phase_deg", "angle_deg", "axis", "centre"),
                "move": ("type", "displacement", "duration", "start"),
@@ -426,7 +467,6 @@ MOTION_KEYS = {"translate": ("type", "velocity", "start"),
                "flap": ("type", "wave_height", "period", "ramp", "depth")}
 DRIVEN_TIMEOUT = 0.5  # [s] of simulated time a command is held before the body is brought to rest
 MAX_SERIES_ROWS = 100_000  # samples of a series: a wavemaker's 10 minutes at 100 Hz is 60,000
-MAX_SERIES_BYTES = 8 << 20  # of a series file: 100,000 rows of five numbers
 SERIES_CHANNELS = ("x", "y", "z", "angle_deg")
 
 
@@ -583,6 +623,11 @@ def _floating(where, value, obstacle, dim) -> bodies.Floating:
     it may move along and turn about (2D: translate [x, y], rotate about z), when it is let go, and
     its velocity and angular velocity then."""
     item = _mapping(where, value, FLOATING_KEYS)
+    if obstacle.shape == "points":
+        for key in ("mass", "centre_of_mass", "inertia"):
+            if key not in item:
+                raise ConfigError(f"{where}.{key}", None, "a floating points body's mass, centre_of_mass and inertia "
+                                                          "(its solid is not known from its particles)")
     if ("density" in item) == ("mass" in item):
         raise ConfigError(where, value, "one of density [kg/m^3] and mass [kg; kg/m in 2D]")
     body = shapes.solid(obstacle, dim)

@@ -8,6 +8,9 @@ defaults, as a uniform solid).
 - ``cylinder``: the circle inscribed in the box's section across ``axis`` (2D: a disc, the box a
   square; 3D: the axis x, y or z, the box square across it).
 - ``sphere`` (3D): the sphere inscribed in a cubic box.
+- ``points``: the particles given (a hull from another tool, as GPUSPH's and DualSPHysics' points
+  files), a spacing apart; its box is its extent, what it displaces of the fluid and what meets
+  walls and bodies; its solid is unknown (a floating one is given its mass, centre and inertia).
 
 Round shapes are lined with rings (shells on a sphere) of particles a spacing apart, from half a
 spacing inside the surface inward, so that the surface the fluid sees is round, not a lattice's
@@ -20,9 +23,10 @@ import numpy as np
 
 from .boxes import cells, fill_box
 
-SHAPES = ("box", "wedge", "cylinder", "sphere")
+SHAPES = ("box", "wedge", "cylinder", "sphere", "points")
 ROUND = ("cylinder", "sphere")
 AXES = ("x", "y", "z")
+SPACING_SAMPLE = 4096  # points whose nearest neighbours give a points body's spacing
 
 
 @dataclass(frozen=True)
@@ -157,12 +161,50 @@ def particles(obstacle, dx: float, dim: int, layers: int):
         return cylinder_particles(lo, hi, dx, dim, layers, obstacle.axis)
     if obstacle.shape == "sphere":
         return sphere_particles(lo, hi, dx, layers)
+    if obstacle.shape == "points":
+        return np.array(obstacle.points, dtype=np.float64), dx ** dim
     return block_particles(lo, hi, dx, dim, layers, bottom=obstacle.motion is not None)
+
+
+def median_spacing(pts: np.ndarray, dim: int) -> float:
+    """The median distance from each of ``pts`` (n x 3) to its nearest other: what a points body's
+    particles are apart. Each point is held against the points of its own and the neighbouring
+    cells of a grid (sorted by cell, a cell's points found by bisection); a nearest point no
+    farther than a cell is the nearest of all, and the others look again in cells twice as wide,
+    from cells too small to hold two. For many points, the median of SPACING_SAMPLE of them, evenly
+    spread through the list. Infinite for one point."""
+    pts = np.asarray(pts, dtype=np.float64)[:, :dim]
+    n = len(pts)
+    if n < 2:
+        return math.inf
+    lo = pts.min(axis=0)
+    size = max(float(np.ptp(pts, axis=0).max()), 1e-12) / n  # as if on a line: a shell or a slab is denser
+    todo = np.unique(np.linspace(0, n - 1, min(n, SPACING_SAMPLE)).astype(np.int64))
+    nearest = np.full(n, np.nan)
+    while len(todo):
+        cell = np.floor((pts - lo) / size).astype(np.int64) + 1  # a margin of one cell on every side
+        shape = cell.max(axis=0) + 2
+        key = np.ravel_multi_index(cell.T, shape)
+        order = np.argsort(key, kind="stable")
+        sorted_key = key[order]
+        best = np.full(len(todo), np.inf)
+        for offset in np.array(np.meshgrid(*[[-1, 0, 1]] * dim)).reshape(dim, -1).T:
+            other = np.ravel_multi_index((cell[todo] + offset).T, shape)
+            first, last = np.searchsorted(sorted_key, other), np.searchsorted(sorted_key, other, side="right")
+            for k in range(int((last - first).max())):
+                j = order[np.minimum(first + k, n - 1)]
+                d = np.where((first + k < last) & (j != todo), np.linalg.norm(pts[todo] - pts[j], axis=1), np.inf)
+                best = np.minimum(best, d)
+        found = best <= size
+        nearest[todo[found]] = best[found]
+        todo = todo[~found]
+        size *= 2.0
+    return float(np.nanmedian(nearest))
 
 
 def holds(obstacle, pts, dim: int, margin: float) -> np.ndarray:
     """Which of ``pts`` lie inside ``obstacle``'s solid grown by ``margin`` [m] (the fluid it takes
-    the place of); a box and a wedge by their box."""
+    the place of); a box, a wedge and points by their box."""
     lo, hi = np.asarray(obstacle.lo, dtype=float), np.asarray(obstacle.hi, dtype=float)
     in_box = np.all((pts[:, :dim] >= lo[:dim]) & (pts[:, :dim] <= hi[:dim]), axis=1)
     if obstacle.shape not in ROUND:
@@ -211,7 +253,7 @@ def solid(obstacle, dim: int) -> Solid:
     centre = 0.5 * (lo + hi)
     if dim == 2:
         size[2], centre[2] = 0.0, 0.0
-    if obstacle.shape == "box":
+    if obstacle.shape in ("box", "points"):  # points: the box, unless the scene gives the body's
         a, b, c = size
         return Solid(float(np.prod(size[:dim])), tuple(centre),
                      _diag((b * b + c * c) / 12.0, (a * a + c * c) / 12.0, (a * a + b * b) / 12.0))
