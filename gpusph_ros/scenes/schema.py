@@ -229,8 +229,9 @@ def read_columns(scene_path: Path, name, field_name: str, columns: tuple, first:
         raise ConfigError(field_name, str(path), "a CSV file: a header naming " + ", ".join(allowed) + ", then rows")
     names = [n.strip() for n in lines[0].split(",")]
     if first not in names or any(n not in allowed for n in names) or len(set(names)) < len(names):
+        # the file's own words are not quoted: a scene may name any file the node can read
         raise ConfigError(field_name, str(path), f"a header naming {first} and any of " + ", ".join(allowed[1:])
-                                                 + f", each once (it names {_quote(names)})")
+                                                 + ", each once")
     if len(lines) - 1 > MAX_CSV_ROWS:
         raise ConfigError(field_name, str(path), f"at most {MAX_CSV_ROWS:,} rows ({len(lines) - 1:,})")
     values = {n: [] for n in names}
