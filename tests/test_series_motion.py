@@ -129,9 +129,9 @@ def test_a_series_faster_than_a_tenth_of_the_sound_speed_is_refused_at_build():
 @pytest.mark.unit
 def test_a_refused_series_file_is_not_quoted(tmp_path):
     """A scene may name any file the node can read: a refusal names the file, never its words."""
-    (tmp_path / "secret.csv").write_text("root:x:0:0:secret,token\n")
+    (tmp_path / "secret.csv").write_text("hunter2:x:0:0,passphrase\n")
     scene = piston_tank({"type": "series", "file": "secret.csv"})
     (tmp_path / "tank.yaml").write_text(yaml.safe_dump(scene))
     with pytest.raises(ConfigError) as err:
         load_scene(tmp_path / "tank.yaml")
-    assert "secret.csv" in str(err.value) and "root" not in str(err.value) and "token" not in str(err.value)
+    assert "secret.csv" in str(err.value) and "hunter2" not in str(err.value) and "passphrase" not in str(err.value)
