@@ -198,17 +198,13 @@ def series_samples(series, per_interval: int = 8):
     and its ends, (k, 4) each: where the spline reaches and how fast, which its samples alone do
     not say (a cubic overshoots them)."""
     table = series_table([Motion(law="series", series=series)])
-    s = np.linspace(0.0, 1.0, per_interval, endpoint=False)
-    value, rate = [], []
-    for k in range(len(table) - 1):
-        tau = s * (table[k + 1, 0] - table[k, 0])
-        coef = table[k, 1:].reshape(CHANNELS, 4)
-        value.append(coef[:, 0] + np.outer(tau, coef[:, 1]) + np.outer(tau ** 2, coef[:, 2])
-                     + np.outer(tau ** 3, coef[:, 3]))
-        rate.append(coef[:, 1] + np.outer(2.0 * tau, coef[:, 2]) + np.outer(3.0 * tau ** 2, coef[:, 3]))
-    value.append(table[-1:, 1::4])
-    rate.append(np.zeros((1, CHANNELS)))
-    return np.concatenate(value), np.concatenate(rate)
+    tau = np.diff(table[:, 0])[:, None] * np.linspace(0.0, 1.0, per_interval, endpoint=False)[None, :]
+    coef = table[:-1, 1:].reshape(-1, 1, CHANNELS, 4)  # interval, sample, channel, power
+    tau = tau[:, :, None]
+    value = coef[..., 0] + tau * (coef[..., 1] + tau * (coef[..., 2] + tau * coef[..., 3]))
+    rate = coef[..., 1] + tau * (2.0 * coef[..., 2] + 3.0 * tau * coef[..., 3])
+    return (np.concatenate([value.reshape(-1, CHANNELS), table[-1:, 1::4]]),
+            np.concatenate([rate.reshape(-1, CHANNELS), np.zeros((1, CHANNELS))]))
 
 
 def quaternion_matrix(q) -> np.ndarray:
@@ -348,8 +344,11 @@ def build(scalar):
         lo = law.first
         hi = law.first + law.count - 1
         tau = wp.float64(0.0)
+        moving = wp.float64(1.0)  # 0 before the first time: standing, its spline's start curvature unfelt
         if t <= table[lo, 0]:
             hi = lo
+            if t < table[lo, 0]:
+                moving = wp.float64(0.0)
         elif t >= table[hi, 0]:
             lo = hi
         else:
@@ -370,7 +369,7 @@ def build(scalar):
             d = table[lo, 4 + 4 * c]
             value[c] = a + tau * (b + tau * (cc + tau * d))
             rate[c] = b + tau * (wp.float64(2.0) * cc + wp.float64(3.0) * tau * d)
-            accel[c] = wp.float64(2.0) * cc + wp.float64(6.0) * tau * d
+            accel[c] = moving * (wp.float64(2.0) * cc + wp.float64(6.0) * tau * d)
         pose = Pose()
         pose.x = law.centre + wp.vec3d(value[0], value[1], value[2])
         pose.q = wp.quat_from_axis_angle(law.axis, value[3])
