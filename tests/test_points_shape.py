@@ -94,3 +94,14 @@ def test_points_a_spacing_other_than_the_runs_are_refused_at_build():
         with pytest.raises(ConfigError) as err:
             build(parse_scene(points_tank(paddle_points())), dx=dx)
         assert err.value.field == "obstacles[0].points" and "median spacing is 0.02 m" in str(err.value)
+
+
+@pytest.mark.unit
+def test_a_points_file_without_a_coordinate_is_refused(tmp_path):
+    (tmp_path / "paddle.csv").write_text("x\n0.05\n0.07\n")
+    scene = piston_tank(SWING)
+    scene["obstacles"][0].update({"shape": "points", "file": "paddle.csv"})
+    (tmp_path / "tank.yaml").write_text(yaml.safe_dump(scene))
+    with pytest.raises(ConfigError) as err:
+        load_scene(tmp_path / "tank.yaml")
+    assert err.value.field == "obstacles[0].file" and "columns x, y" in str(err.value)

@@ -177,7 +177,7 @@ def _scene_file(name_or_path, field_name: str, chain: tuple):
         raise ConfigError(field_name, str(path),
                           f"a YAML mapping of scene fields (the file holds {type(data).__name__})")
     if "base" not in data:
-        return _series_files(path, text, data)
+        return _read_files(path, text, data)
     base = data["base"]
     if not isinstance(base, str) or base in chain or len(chain) >= MAX_BASES:
         raise ConfigError("base", base, f"the name or path of another scene file, in a chain of at most "
@@ -188,10 +188,10 @@ def _scene_file(name_or_path, field_name: str, chain: tuple):
     merged = {**base_data, **{key: value for key, value in data.items() if key != "base"}}
     merged["name"] = data.get("name", path.stem)
     text = f"# {path.name}: the scene {data['base']} with this file's keys\n" + yaml.safe_dump(merged, sort_keys=False)
-    return _series_files(path, text, merged)
+    return _read_files(path, text, merged)
 
 
-def _series_files(path: Path, text: str, data: dict):
+def _read_files(path: Path, text: str, data: dict):
     """(path, text, data) with each obstacle's points ``file`` and each series motion's ``file``
     (a CSV beside the scene file, or a path) read into its columns, and the text the scene with
     them, which a recording then holds whole."""
@@ -445,7 +445,9 @@ def _points(where, item, obstacle, dim) -> tuple:
                                                          "carries the points")
     pts = item["points"]
     if isinstance(pts, dict):  # a file's columns
-        pts = [list(row) for row in zip(*(pts.get(c, []) for c in POINT_COLUMNS[:dim]))]
+        if any(c not in pts for c in POINT_COLUMNS[:dim]):
+            raise ConfigError(f"{where}.file", sorted(pts), "columns " + ", ".join(POINT_COLUMNS[:dim]))
+        pts = [list(row) for row in zip(*(pts[c] for c in POINT_COLUMNS[:dim]))]
     if not isinstance(pts, list) or not 1 <= len(pts) <= MAX_POINTS:
         raise ConfigError(f"{where}.points", _quote(pts), f"a list of 1 to {MAX_POINTS:,} points [x, y(, z)] [m]")
     rows = np.array([_vector(f"{where}.points[{k}]", p, dim) for k, p in enumerate(pts)])
