@@ -50,7 +50,8 @@ def model_of_about(scene_name: str, target: float, **settings):
 def run_series(scene_name, **settings) -> dict:
     """Run ``scene_name`` (a built-in scene's name, a file's path, or a parsed Scene) under run
     ``settings`` (``scenes.settings.resolve`` keys); the record: counts, steps, wall time (kernel
-    loading excluded), MIPPS, how it ended, and ``series`` {name: list} with ``t``."""
+    loading excluded), MIPPS, the fluid particles excluded, how it ended, and ``series`` {name: list}
+    with ``t``."""
     wp.config.log_level = wp.LOG_WARNING
     from gpusph_ros.measure.suite import Measurements
     from gpusph_ros.scenes.build import build_run
@@ -85,7 +86,7 @@ def run_series(scene_name, **settings) -> dict:
             "precision": cfg.precision, "device": str(solver.device), "particles": solver.n,
             "fluid_particles": built.fluid_particles, "steps": steps, "wall_s": wall,
             "mipps": solver.n * steps / wall / 1e6 if wall > 0 else 0.0, "simulated_s": solver.time,
-            "status": status, "series": series}
+            "excluded": solver.excluded_particles, "status": status, "series": series}
 
 
 def parser(doc: str, out: str):

@@ -10,12 +10,12 @@ Prints each gauge's height against the paddle's H, and the decay rate mu of the 
 """
 import argparse
 import csv
-import time
 from pathlib import Path
 
 import numpy as np
 
 import csv_rows
+from series import run_series
 
 REPO = Path(__file__).resolve().parents[1]
 FIELDS = ["period", "depth", "wave_height", "kh", "dx", "length", "walls", "settings", "particles", "wall_s", "window",
@@ -37,9 +37,8 @@ def main():
 
     wp.config.log_level = wp.LOG_WARNING
     from gpusph_ros.analysis import waves
-    from gpusph_ros.runner import Run
     from gpusph_ros.scenes.flume import PADDLE, wave_flume
-    from gpusph_ros.scenes.settings import resolve
+    from gpusph_ros.scenes.settings import parse_set
     from gpusph_ros.theory import wavemaker
 
     settings = " ".join(args.set)
@@ -56,20 +55,12 @@ def main():
     if start >= end - 2 * args.period:
         raise SystemExit(f"no two periods between {start:.2f} s and {end:.2f} s: a longer --length")
     scene = wave_flume(args.length, h, args.period, args.height, xs, walls=args.walls, first=0)
-    run = Run(scene, resolve(scene, sets=[f"dx={args.dx}", f"end_time={end:.3f}", "output_rate=50", *args.set]))
-    print(f"T = {args.period} s, kh = {kh:.3f}, H = {args.height} m: {run.summary()}; window "
-          f"{start:.2f}-{end:.2f} s", flush=True)
-    names = [f"g{n}" for n in range(len(xs))]
-    t0, times, levels = time.perf_counter(), [], []
-    while not run.done:
-        msgs = run.step_output()
-        if msgs is None:
-            continue
-        by_name = {tp.rsplit("/", 1)[-1]: m for tp, m in msgs}
-        levels.append([by_name[n].point.z for n in names])
-        times.append(run.solver.time)
-    wall = time.perf_counter() - t0
-    t, eta = np.array(times), np.array(levels)
+    print(f"T = {args.period} s, kh = {kh:.3f}, H = {args.height} m; window {start:.2f}-{end:.2f} s", flush=True)
+    record = run_series(scene, dx=args.dx, end_time=end, output_rate=50, **dict(map(parse_set, args.set)))
+    if record["status"] != "completed":
+        raise SystemExit(record["status"])
+    t = np.array(record["series"]["t"])
+    eta = np.column_stack([record["series"][f"gauges/g{n}"] for n in range(len(xs))])
     window = (t >= start) & (t <= end)
     heights = np.array([2 * waves.sinusoid(t[window], eta[window, j], args.period)[0] for j in range(len(xs))])
     far = xs >= 0.5
@@ -77,10 +68,10 @@ def main():
     errors = 100 * (heights / args.height - 1)
     print("x from the paddle [m] and height against H:\n" +
           "\n".join(f"  {x:.1f}  {e:+.1f}%" for x, e in zip(xs, errors)))
-    print(f"decay rate {decay:.3f} /m beyond 0.5 m; {wall:.0f} s", flush=True)
+    print(f"decay rate {decay:.3f} /m beyond 0.5 m; {record['wall_s']:.0f} s", flush=True)
     row = {"period": args.period, "depth": h, "wave_height": args.height, "kh": round(kh, 4), "dx": args.dx,
-           "length": args.length, "walls": args.walls, "settings": settings, "particles": run.solver.n,
-           "wall_s": round(wall, 1),
+           "length": args.length, "walls": args.walls, "settings": settings, "particles": record["particles"],
+           "wall_s": round(record["wall_s"], 1),
            "window": f"{start:.2f}-{end:.2f}", "decay_per_m": round(float(decay), 4),
            "err_0.5_1.5m_pct": round(float(errors[(xs >= 0.5) & (xs <= 1.5)].mean()), 1),
            "heights": " ".join(f"{e:+.1f}" for e in errors)}

@@ -13,12 +13,12 @@ run is appended to ``--out`` as it ends; a run already there is skipped.
 """
 import argparse
 import csv
-import time
 from pathlib import Path
 
 import numpy as np
 
 import csv_rows
+from series import run_series
 
 REPO = Path(__file__).resolve().parents[1]
 FIELDS = ["kind", "period", "depth", "wave_height", "kh", "dx", "settings", "particles", "wall_s", "window",
@@ -40,9 +40,8 @@ def main():
 
     wp.config.log_level = wp.LOG_WARNING
     from gpusph_ros.analysis import waves
-    from gpusph_ros.runner import Run
     from gpusph_ros.scenes.flume import PADDLE, wave_flume
-    from gpusph_ros.scenes.settings import resolve
+    from gpusph_ros.scenes.settings import parse_set
     from gpusph_ros.theory import wavemaker
 
     done = set()
@@ -62,28 +61,22 @@ def main():
             raise SystemExit(f"T = {period} s: no whole period between the ramp's arrival at the last gauge "
                              f"({start:.2f} s) and the reflection's ({end:.2f} s); a longer --length")
         scene = wave_flume(args.length, h, period, args.height, gauges, kind=args.kind)
-        run = Run(scene, resolve(scene, sets=[f"dx={args.dx}", f"end_time={end:.3f}", "output_rate=50",
-                                             *args.set]))
-        print(f"{args.kind} T = {period} s, kh = {kh:.3f}, H = {args.height} m: {run.summary()}; window "
-              f"{start:.2f}-{end:.2f} s", flush=True)
-        t0 = time.perf_counter()
-        times, levels = [], []
-        while not run.done:
-            msgs = run.step_output()
-            if msgs is None:
-                continue
-            levels.append([m.point.z for tp, m in msgs if tp.rsplit("/", 1)[-1] in ("g1", "g2", "g3")])
-            times.append(run.solver.time)
-        wall = time.perf_counter() - t0
-        times, levels = np.array(times), np.array(levels)
+        print(f"{args.kind} T = {period} s, kh = {kh:.3f}, H = {args.height} m; window {start:.2f}-{end:.2f} s",
+              flush=True)
+        record = run_series(scene, dx=args.dx, end_time=end, output_rate=50, **dict(map(parse_set, args.set)))
+        if record["status"] != "completed":
+            raise SystemExit(record["status"])
+        times = np.array(record["series"]["t"])
+        levels = np.column_stack([record["series"][f"gauges/g{n + 1}"] for n in range(3)])
         window = (times >= start) & (times <= end)
         heights = [2 * waves.sinusoid(times[window], levels[window, n], period)[0] for n in range(3)]
         period_fit = waves.period_of(times[window], levels[window, 0], period)
         row = {"kind": args.kind, "period": period, "depth": h, "wave_height": args.height, "kh": round(kh, 4),
-               "dx": args.dx, "settings": settings, "particles": run.solver.n, "wall_s": round(wall, 1),
+               "dx": args.dx, "settings": settings, "particles": record["particles"],
+               "wall_s": round(record["wall_s"], 1),
                "window": f"{start:.2f}-{end:.2f}", **{f"H_g{n + 1}": round(v, 5) for n, v in enumerate(heights)},
                **{f"err_g{n + 1}_pct": round(100 * (v / args.height - 1), 1) for n, v in enumerate(heights)},
-               "period_fit": round(period_fit, 4), "excluded": run.solver.excluded_particles}
+               "period_fit": round(period_fit, 4), "excluded": record["excluded"]}
         print(row, flush=True)
         csv_rows.append(args.out, row, FIELDS)
 
