@@ -35,7 +35,6 @@ def elevation(heights: np.ndarray, weight: np.ndarray) -> float:
     return float(heights[k] + (heights[k + 1] - heights[k]) * (w0 - LEVEL) / (w0 - w1))
 
 
-
 class Gauges:
     """Gauges at many horizontal ``positions`` (k x 3, the vertical coordinate ignored), each a line
     from ``bottom``, which must be under the water, to ``top``: the mean of their elevations is the

@@ -449,7 +449,7 @@ def _points(where, item, obstacle, dim) -> tuple:
             raise ConfigError(f"{where}.file", sorted(pts), "columns " + ", ".join(POINT_COLUMNS[:dim]))
         pts = [list(row) for row in zip(*(pts[c] for c in POINT_COLUMNS[:dim]))]
     if not isinstance(pts, list) or not 1 <= len(pts) <= MAX_POINTS:
-        raise ConfigError(f"{where}.points", _quote(pts), f"a list of 1 to {MAX_POINTS:,} points [x, y(, z)] [m]")
+        raise ConfigError(f"{where}.points", pts, f"a list of 1 to {MAX_POINTS:,} points [x, y(, z)] [m]")
     rows = np.array([_vector(f"{where}.points[{k}]", p, dim) for k, p in enumerate(pts)])
     lo, hi = np.asarray(obstacle.lo[:dim]), np.asarray(obstacle.hi[:dim])
     outside = np.any((rows < lo) | (rows > hi), axis=1)
@@ -483,7 +483,7 @@ def _series(where, item, dim) -> tuple:
                                                          "carries the columns: time, x, y, z, angle_deg")
     times = item.get("time")
     if not isinstance(times, list) or not 2 <= len(times) <= MAX_SERIES_ROWS:
-        raise ConfigError(f"{where}.time", _quote(times), f"a list of 2 to {MAX_SERIES_ROWS:,} times [s]")
+        raise ConfigError(f"{where}.time", times, f"a list of 2 to {MAX_SERIES_ROWS:,} times [s]")
     t = np.array([_number(f"{where}.time[{k}]", v, lo=0.0) for k, v in enumerate(times)])
     if np.any(np.diff(t) <= 0.0):
         k = int(np.argmax(np.diff(t) <= 0.0)) + 1
@@ -495,22 +495,15 @@ def _series(where, item, dim) -> tuple:
     rows[:, 0] = t
     for c in given:
         if c == "z" and dim == 2:
-            raise ConfigError(f"{where}.z", _quote(item[c]), "no z in 2D: x along the tank, y up")
+            raise ConfigError(f"{where}.z", item[c], "no z in 2D: x along the tank, y up")
         column = item[c]
         if not isinstance(column, list) or len(column) != len(t):
-            raise ConfigError(f"{where}.{c}", _quote(column), f"a list of {len(t)} numbers, one per time")
+            raise ConfigError(f"{where}.{c}", column, f"a list of {len(t)} numbers, one per time")
         values = np.array([_number(f"{where}.{c}[{k}]", v) for k, v in enumerate(column)])
         if values[0] != 0.0:
             raise ConfigError(f"{where}.{c}[0]", float(values[0]), "0: a series starts where the scene put the body")
         rows[:, 1 + SERIES_CHANNELS.index(c)] = np.radians(values) if c == "angle_deg" else values
     return tuple(tuple(float(v) for v in row) for row in rows)
-
-
-def _quote(value):
-    """A long list shortened for a message: its length and first items."""
-    if isinstance(value, list) and len(value) > 4:
-        return f"[{', '.join(map(repr, value[:3]))}, ... ({len(value):,} items)]"
-    return value
 
 
 def _wavemaker(where, item, kind, obstacle, dim, depth, g) -> bodies.Motion:

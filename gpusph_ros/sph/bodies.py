@@ -193,18 +193,23 @@ def series_table(motions: list) -> np.ndarray:
     return np.concatenate(rows[1:] or rows)
 
 
+@functools.lru_cache(maxsize=8)
 def series_samples(series, per_interval: int = 8):
     """(d and theta, their rates) of a series' spline at ``per_interval`` points of each interval
-    and its ends, (k, 4) each: where the spline reaches and how fast, which its samples alone do
-    not say (a cubic overshoots them)."""
+    and its ends, (k, 4) each, read-only: where the spline reaches and how fast, which its samples
+    alone do not say (a cubic overshoots them). Kept for the scene's reach and the build's speed
+    check, which ask for the same series."""
     table = series_table([Motion(law="series", series=series)])
     tau = np.diff(table[:, 0])[:, None] * np.linspace(0.0, 1.0, per_interval, endpoint=False)[None, :]
     coef = table[:-1, 1:].reshape(-1, 1, CHANNELS, 4)  # interval, sample, channel, power
     tau = tau[:, :, None]
     value = coef[..., 0] + tau * (coef[..., 1] + tau * (coef[..., 2] + tau * coef[..., 3]))
     rate = coef[..., 1] + tau * (2.0 * coef[..., 2] + 3.0 * tau * coef[..., 3])
-    return (np.concatenate([value.reshape(-1, CHANNELS), table[-1:, 1::4]]),
-            np.concatenate([rate.reshape(-1, CHANNELS), np.zeros((1, CHANNELS))]))
+    out = (np.concatenate([value.reshape(-1, CHANNELS), table[-1:, 1::4]]),
+           np.concatenate([rate.reshape(-1, CHANNELS), np.zeros((1, CHANNELS))]))
+    for a in out:
+        a.setflags(write=False)
+    return out
 
 
 def quaternion_matrix(q) -> np.ndarray:
@@ -592,16 +597,16 @@ def build(scalar):
                 poses[b] = pb
 
     @wp.kernel(enable_backward=False, module="unique")
-    def body_poses(laws: wp.array(dtype=Law), series: wp.array2d(dtype=wp.float64), clock: wp.array(dtype=wp.float64),
-                   factor: wp.float64,
-                   gravity: wp.vec3d, wall_lo: wp.vec3d, wall_hi: wp.vec3d, solid_lo: wp.array(dtype=wp.vec3d),
+    def body_poses(laws: wp.array(dtype=Law), series: wp.array2d(dtype=wp.float64),
+                   clock: wp.array(dtype=wp.float64), factor: wp.float64, gravity: wp.vec3d, wall_lo: wp.vec3d,
+                   wall_hi: wp.vec3d, solid_lo: wp.array(dtype=wp.vec3d),
                    solid_hi: wp.array(dtype=wp.vec3d), n_solids: int, base: wp.array(dtype=Rigid),
                    rates_at: wp.array(dtype=Rigid), sums: wp.array2d(dtype=wp.vec3d), out: wp.array(dtype=Rigid),
                    poses: wp.array(dtype=Pose)):
-        """Each body's pose at t + factor dt: a prescribed body's from its law; a floating body's
-        state advanced from ``base`` by factor dt with the velocities of ``rates_at`` and the last
-        force evaluation's force and torque (sums[b, 0], sums[b, 1]) into ``out`` (factor 0: base
-        itself), its acceleration from those."""
+        """Each body's pose at t + factor dt: a prescribed body's from its law (a series' from its
+        rows of ``series``, series_table); a floating body's state advanced from ``base`` by factor
+        dt with the velocities of ``rates_at`` and the last force evaluation's force and torque
+        (sums[b, 0], sums[b, 1]) into ``out`` (factor 0: base itself), its acceleration from those."""
         b = wp.tid()
         law = laws[b]
         t = clock[T] + factor * clock[DT]
