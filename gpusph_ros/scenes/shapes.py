@@ -179,27 +179,29 @@ def median_spacing(pts: np.ndarray, dim: int) -> float:
         return math.inf
     lo = pts.min(axis=0)
     size = max(float(np.ptp(pts, axis=0).max()), 1e-12) / n  # as if on a line: a shell or a slab is denser
-    todo = np.unique(np.linspace(0, n - 1, min(n, SPACING_SAMPLE)).astype(np.int64))
-    nearest = np.full(n, np.nan)
+    sample = np.unique(np.linspace(0, n - 1, min(n, SPACING_SAMPLE)).astype(np.int64))
+    nearest = np.empty(len(sample))
+    todo = np.arange(len(sample))  # the sample's points without their nearest yet
     while len(todo):
         cell = np.floor((pts - lo) / size).astype(np.int64) + 1  # a margin of one cell on every side
         shape = cell.max(axis=0) + 2
         key = np.ravel_multi_index(cell.T, shape)
         order = np.argsort(key, kind="stable")
         sorted_key = key[order]
+        mine = sample[todo]
         best = np.full(len(todo), np.inf)
         for offset in np.array(np.meshgrid(*[[-1, 0, 1]] * dim)).reshape(dim, -1).T:
-            other = np.ravel_multi_index((cell[todo] + offset).T, shape)
+            other = np.ravel_multi_index((cell[mine] + offset).T, shape)
             first, last = np.searchsorted(sorted_key, other), np.searchsorted(sorted_key, other, side="right")
             for k in range(int((last - first).max())):
                 j = order[np.minimum(first + k, n - 1)]
-                d = np.where((first + k < last) & (j != todo), np.linalg.norm(pts[todo] - pts[j], axis=1), np.inf)
+                d = np.where((first + k < last) & (j != mine), np.linalg.norm(pts[mine] - pts[j], axis=1), np.inf)
                 best = np.minimum(best, d)
         found = best <= size
         nearest[todo[found]] = best[found]
         todo = todo[~found]
         size *= 2.0
-    return float(np.nanmedian(nearest))
+    return float(np.median(nearest))
 
 
 def holds(obstacle, pts, dim: int, margin: float) -> np.ndarray:
