@@ -118,7 +118,6 @@ def test_a_bad_motion_is_refused_naming_its_field(motion, field, allowed):
 @pytest.mark.parametrize("numerics, more, field", [
     ({}, {}, "obstacles[0].motion"),  # 0.4 m in 0.1 s: 8 m/s against c0 / 10 = 1.7 m/s
     ({"boundary": "mdbc"}, {}, "boundary"),
-    ({}, {"refine": [{"name": "near", "lo": [0.3, 0.0], "hi": [0.6, 0.4], "ratio": 0.5}]}, "refine"),
 ])
 def test_what_a_moving_body_cannot_run_with_is_refused_at_build(numerics, more, field):
     fast = numerics == {} and not more

@@ -1,7 +1,8 @@
 """The step loop replayed from a captured graph (sph/graph.py) takes the steps the eager loop takes,
 bit for bit, on the CPU (Warp's API capture), over more than 200 steps and eight outputs: dynamic
 walls with the Shepard filter, mDBC, a zone under multirate (the list builds, reorders, census,
-filter and level changes all branches of the captured step), and bodies that move and float. A
+filter and level changes all branches of the captured step), and bodies that move and float, alone
+and in a zone. A
 replayed loop stops for the host every 64 steps when it can be interrupted, and a reconfigure takes
 effect in the next replay."""
 import hashlib
@@ -25,7 +26,12 @@ CASES = {"dynamic": (COLUMN, dict(dx=0.01, shepard_every=30)),
              {"name": "paddle", "lo": [0.3, 0.0], "hi": [0.34, 0.32],
               "motion": {"type": "sinusoid", "amplitude": [0.01, 0.0], "period": 0.1, "phase_deg": -90}},
              {"name": "box", "lo": [0.03, 0.18], "hi": [0.09, 0.22], "displaces_fluid": True,
-              "floating": {"density": 500.0}}]}, dict(dx=0.01))}
+              "floating": {"density": 500.0}}]}, dict(dx=0.01)),
+         # both in a zone under multirate, the column running into it
+         "zoned_bodies": ({**COLUMN, "refine": [DOWNSTREAM], "obstacles": [
+             {"name": "paddle", "lo": [0.5, 0.0], "hi": [0.54, 0.32],
+              "motion": {"type": "sinusoid", "amplitude": [0.01, 0.0], "period": 0.1, "phase_deg": -90}},
+             {"name": "box", "lo": [0.33, 0.05], "hi": [0.39, 0.09], "floating": {"density": 500.0}}]}, dict(dx=0.02))}
 
 
 def digest(solver) -> str:

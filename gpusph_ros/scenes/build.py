@@ -127,9 +127,6 @@ def moving_bodies(scene: Scene, cfg: SolverConfig) -> list:
     under a tenth of the sound speed (weak compressibility's bound on the flow it drives)."""
     if all(o.motion is None for o in scene.obstacles):
         return []
-    if scene.refine:
-        raise ConfigError("refine", [z.name for z in scene.refine], "no refinement zones in a scene with a moving "
-                                                                   "obstacle (not carried through yet)")
     for k, o in enumerate(scene.obstacles):
         if isinstance(o.motion, bodies.Motion):
             corners = np.array(np.meshgrid(*zip(o.lo, o.hi))).reshape(3, -1).T
@@ -140,6 +137,18 @@ def moving_bodies(scene: Scene, cfg: SolverConfig) -> list:
                                                                     f"{cfg.sound_speed / 10.0:.3g} m/s; it reaches "
                                                                     f"{speed:.3g} m/s")
     return [o.motion for o in scene.obstacles]
+
+
+def sweeps(scene: Scene) -> dict:
+    """{obstacle id: (lo, hi), the box its motion sweeps (bodies.Motion.sweep)} of the moving
+    obstacles; where no bound is known (a floating or driven body, a translation), its box at the
+    start, and the run checks it stays on its side of every zone's faces (health: zone_edge)."""
+    out = {}
+    for k, o in enumerate(scene.obstacles):
+        if o.motion is not None:
+            sweep = o.motion.sweep(o.lo, o.hi) if isinstance(o.motion, bodies.Motion) else None
+            out[k] = sweep or (np.asarray(o.lo, dtype=np.float64), np.asarray(o.hi, dtype=np.float64))
+    return out
 
 
 def build_from(scene: Scene, cfg: SolverConfig) -> Model:
@@ -196,9 +205,12 @@ def build_from(scene: Scene, cfg: SolverConfig) -> Model:
             resources.check_count(n, cfg, "refine", [z.name for z in scene.refine], "the zones make",
                                   "coarser or smaller zones", refined=True)
 
+        boxes = {k: (o.lo, o.hi) for k, o in enumerate(scene.obstacles) if o.shape == "box"}
+        moving = sweeps(scene)
+        refine.check_paths(scene.refine, moving, [o.name for o in scene.obstacles], scene.tank, dim, dx, cfg.hdx)
         columns, spacing = refine.split(columns, np.full(len(columns["pos"]), dx), scene.refine, scene.tank, dim, dx,
                                         cfg.hdx, stratify=lambda rho, dz: restratify(rho, dz, cfg), limit=limit,
-                                        layers=layers, solids=solids)
+                                        layers=layers, solids=boxes, moving=moving)
         columns, spacing = refine.reserve(columns, spacing, scene.refine, scene.tank, dim, dx, cfg.hdx, limit=limit)
         cfg = cfg.replace(zones=refine.zone_boxes(scene.refine, scene.tank, dim, dx))
     pos = columns["pos"] + np.asarray(scene.origin)

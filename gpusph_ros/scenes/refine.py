@@ -16,7 +16,7 @@ boundary) reaches on through that wall, so its wall particles are split too.
 import numpy as np
 
 from ..sph.config import ConfigError
-from ..sph.levels import band_width, sub_offsets
+from ..sph.levels import band_width, edge_margin, sub_offsets
 from ..sph.state import BOUNDARY, FLUID, PASSIVE, VACANT
 
 
@@ -69,17 +69,19 @@ def distance_outside(pos: np.ndarray, lo: np.ndarray, hi: np.ndarray, dim: int) 
 def wall_depth(pos: np.ndarray, body: np.ndarray, tank, solids, dim: int) -> np.ndarray:
     """How deep each boundary point lies in its solid: below a tank wall's face (``body`` -1; the
     tank [0, tank] open at the top) or in from the nearest face of obstacle ``body`` that the fluid
-    meets (``solids``: (lo, hi) per obstacle; its side faces and its top)."""
+    meets (``solids``: {obstacle id: (lo, hi)} of the box obstacles; every face but one on the
+    floor). An obstacle not in ``solids`` (a round one, a wedge) lies 0 deep: all of it is kept."""
     up = dim - 1
     lo = np.zeros(dim)
     hi = np.asarray(tank[:dim], dtype=np.float64).copy()
     hi[up] = np.inf
     depth = distance_outside(pos, lo, hi, dim)
-    for k, (s_lo, s_hi) in enumerate(solids):
+    for k, (s_lo, s_hi) in solids.items():
         mine = body == k
-        faces = [pos[mine, ax] - s_lo[ax] for ax in range(dim) if ax != up]
+        faces = [pos[mine, ax] - s_lo[ax] for ax in range(dim) if ax != up or s_lo[up] > 0.0]
         faces += [s_hi[ax] - pos[mine, ax] for ax in range(dim)]
         depth[mine] = np.min(faces, axis=0)
+    depth[(body >= 0) & ~np.isin(body, list(solids))] = 0.0
     return depth
 
 
@@ -111,8 +113,33 @@ def daughters(columns: dict, spacing: np.ndarray, parents: np.ndarray, target: f
     return out, np.full(len(out["pos"]), target)
 
 
+def check_paths(zones, moving: dict, names: list, tank, dim: int, dx: float, hdx: float):
+    """Each moving body's path (``moving``: {obstacle id: (lo, hi) of the box it sweeps}) inside a
+    zone, or clear of it, by levels.edge_margin of the zone's spacing: a body is not carried from one
+    level to another."""
+    for k, (lo, hi) in moving.items():
+        lo, hi = np.asarray(lo)[:dim], np.asarray(hi)[:dim]
+        for j, zone in enumerate(zones):
+            z_lo, z_hi = zone_bounds(zone, tank, dim)
+            margin = edge_margin(zone.ratio * dx, hdx)
+            inside = np.all(lo - margin >= z_lo) and np.all(hi + margin <= z_hi)
+            clear = np.any(lo - margin > z_hi) or np.any(hi + margin < z_lo)
+            if not (inside or clear):
+                raise ConfigError(f"refine[{j}]", zone.name, f"a zone that holds the path of moving obstacle "
+                                                             f"'{names[k]}' or stays clear of it, {margin:.3g} m "
+                                                             f"(levels.edge_margin) either side of its faces; the "
+                                                             f"path spans {np.round(lo, 4).tolist()} to "
+                                                             f"{np.round(hi, 4).tolist()} m")
+
+
+def _reaching(moving: dict, lo: np.ndarray, hi: np.ndarray, dim: int) -> list:
+    """The moving bodies whose path (``split``'s ``moving``) overlaps the box [lo, hi] (dim axes)."""
+    return [k for k, (s_lo, s_hi) in moving.items()
+            if np.all(np.asarray(s_lo)[:dim] <= hi) and np.all(np.asarray(s_hi)[:dim] >= lo)]
+
+
 def split(columns: dict, spacing: np.ndarray, zones, tank, dim: int, dx: float, hdx: float, stratify=None,
-          limit=None, layers=None, solids=()):
+          limit=None, layers=None, solids=None, moving=None):
     """``columns`` (name -> per-particle array: pos, rho, mass, ptype, body, ...) and ``spacing``
     with each zone's level added (levels.py, adaptive particle refinement):
 
@@ -123,8 +150,11 @@ def split(columns: dict, spacing: np.ndarray, zones, tank, dim: int, dx: float, 
       a kernel support (2 h of the zone's level, and half its spacing) of the zone: walls, and
       passive fluid, so that every sum of the zone's active particles is over one spacing;
     - with ``layers`` (the boundary model's wall thickness in spacings), a wall's daughters only
-      that many of the zone's spacings deep in their solid (``wall_depth``; ``solids`` the obstacles'
-      (lo, hi)), where the parent level's layers are twice as deep.
+      that many of the zone's spacings deep in their solid (``wall_depth``; ``solids`` the box
+      obstacles' {id: (lo, hi)}), where the parent level's layers are twice as deep;
+    - a moving body (``moving``: {id: the box it sweeps, (lo, hi) 3-vectors; check_paths}) inside
+      the zone gets daughters all over, not only those the zone holds at the start: wherever it
+      goes in the zone it is lined at the zone's spacing.
 
     ``stratify(rho, dz)``, if given, is the density a daughter dz above its parent of density rho
     starts with (the hydrostatic profile the lattice was built on), else the parent's. ``limit(n)``,
@@ -137,6 +167,7 @@ def split(columns: dict, spacing: np.ndarray, zones, tank, dim: int, dx: float, 
         reach = band_width(target, hdx)
         near = distance_outside(pos, lo, hi, dim) <= reach + spacing  # a daughter lies within spacing / 2
         inside = parent_level & np.all((pos[:, :dim] >= lo) & (pos[:, :dim] <= hi), axis=1)
+        inside |= parent_level & np.isin(columns["body"], _reaching(moving or {}, lo, hi, dim))
         band = parent_level & near & ~inside
         if not inside.any():
             continue
@@ -145,9 +176,9 @@ def split(columns: dict, spacing: np.ndarray, zones, tank, dim: int, dx: float, 
         keep = distance_outside(ring["pos"], lo, hi, dim) <= reach
         if layers is not None:
             thickness = layers * target
-            made = _shallow(new, thickness, tank, solids, dim)
+            made = _shallow(new, thickness, tank, solids or {}, dim)
             new, new_spacing = {name: values[made] for name, values in new.items()}, new_spacing[made]
-            keep &= _shallow(ring, thickness, tank, solids, dim)
+            keep &= _shallow(ring, thickness, tank, solids or {}, dim)
         ring = {name: values[keep] for name, values in ring.items()}
         ring["ptype"] = np.where(ring["ptype"] == FLUID, PASSIVE, ring["ptype"]).astype(np.int32)
         if limit is not None:

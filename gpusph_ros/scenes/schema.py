@@ -571,14 +571,11 @@ def _motion(where, value, obstacle, tank, dim, depth: float, g: float) -> bodies
         axis = _axis(where, item, dim)
         centre = _pad3(_vector(f"{where}.centre", item["centre"], dim)) if "centre" in item else obstacle.centre(dim)
         motion = bodies.Motion(law="series", centre=centre, axis=axis, series=rows)
-        value_at, _ = bodies.series_samples(rows)
-        reach = list(zip(value_at[:, :3].min(axis=0), value_at[:, :3].max(axis=0)))
     elif kind == "move":
         shift = _pad3(_vector(f"{where}.displacement", item["displacement"], dim))
         motion = bodies.Motion(law="move", centre=obstacle.centre(dim), amplitude=shift,
                                duration=_number(f"{where}.duration", item["duration"], lo=0.0, lo_open=True),
                                start=_number(f"{where}.start", item.get("start", 0.0), lo=0.0))
-        reach = [(min(0.0, c), max(0.0, c)) for c in shift]
     else:
         amplitude = _pad3(_vector(f"{where}.amplitude", item.get("amplitude", [0.0] * dim), dim))
         phase = math.radians(_number(f"{where}.phase_deg", item.get("phase_deg", 0.0), lo=-360.0, hi=360.0))
@@ -590,8 +587,7 @@ def _motion(where, value, obstacle, tank, dim, depth: float, g: float) -> bodies
         motion = bodies.Motion(law="sinusoid", centre=centre, amplitude=amplitude,
                                period=_number(f"{where}.period", item["period"], lo=0.0, lo_open=True),
                                phase=phase, angle=angle, axis=axis)
-        reach = [(a * (-1.0 - math.sin(phase)), a * (1.0 - math.sin(phase))) for a in amplitude]
-        reach = [(min(lo, hi), max(lo, hi)) for lo, hi in reach]
+    reach, _ = motion.reach()
     for ax in range(dim - 1):  # the vertical axis: the tank is open at the top
         low, high = obstacle.lo[ax] + reach[ax][0], obstacle.hi[ax] + reach[ax][1]
         if low < 0.0 or high > tank[ax]:

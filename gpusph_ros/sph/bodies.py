@@ -123,6 +123,33 @@ class Motion:
         omega = 2.0 * math.pi / self.period
         return omega * (float(np.linalg.norm(self.amplitude)) + abs(self.angle) * reach)
 
+    def reach(self):
+        """((lo, hi) of the displacement d along each axis over all time, the largest |theta|
+        [rad]), or None where the law sets no bound (translate, driven)."""
+        if self.law == "series":
+            value_at, _ = series_samples(self.series)
+            return (list(zip(value_at[:, :3].min(axis=0), value_at[:, :3].max(axis=0))),
+                    float(np.abs(value_at[:, 3]).max()))
+        if self.law == "move":
+            return [(min(0.0, c), max(0.0, c)) for c in self.amplitude], 0.0
+        if self.law == "sinusoid":  # sin(omega t + phi) - sin(phi) spans [-1 - sin(phi), 1 - sin(phi)]
+            span = (-1.0 - math.sin(self.phase), 1.0 - math.sin(self.phase))
+            return ([(min(a * s for s in span), max(a * s for s in span)) for a in self.amplitude],
+                    abs(self.angle) * (1.0 + abs(math.sin(self.phase))))
+        return None
+
+    def sweep(self, lo, hi):
+        """(lo, hi) 3-vectors of a box that holds the box [lo, hi] wherever the law takes it (a
+        rotation by theta moves a point r from the centre by at most r |theta|), or None (reach)."""
+        reach = self.reach()
+        if reach is None:
+            return None
+        shift, angle = reach
+        lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
+        corners = np.array(np.meshgrid(*zip(lo, hi))).reshape(3, -1).T
+        turn = min(angle, 2.0) * float(np.linalg.norm(corners - np.asarray(self.centre), axis=1).max())
+        return lo + np.array([s[0] for s in shift]) - turn, hi + np.array([s[1] for s in shift]) + turn
+
 
 @dataclass(frozen=True)
 class Floating:
@@ -709,16 +736,18 @@ def build(scalar):
             state[b] = candidate[b]
 
     @wp.kernel(enable_backward=False, module="unique")
-    def work_on_fluid(laws: wp.array(dtype=Law), clock: wp.array(dtype=wp.float64), ptype: wp.array(dtype=wp.int32),
-                      body: wp.array(dtype=wp.int32), mass: wp.array(dtype=scalar), acc: wp.array(dtype=vec),
-                      vel: wp.array(dtype=vec), total: wp.array(dtype=wp.float64), slot: int):
-        """total[slot] += the work of one step of the moving bodies on the fluid: dt sum_w -m_w a_w .
-        v_w over their particles, a_w the fluid's force on w over m_w and v_w their velocity at the
-        step's midpoint (the corrector's rates): the energy the fluid may gain (health.census_check)."""
+    def work_on_fluid(laws: wp.array(dtype=Law), clock: wp.array(dtype=wp.float64), stride: int,
+                      ptype: wp.array(dtype=wp.int32), body: wp.array(dtype=wp.int32), mass: wp.array(dtype=scalar),
+                      acc: wp.array(dtype=vec), vel: wp.array(dtype=vec), total: wp.array(dtype=wp.float64),
+                      slot: int):
+        """total[slot] += the work of one step (``stride`` steps dt: multirate's coarse step) of the
+        moving bodies on the fluid: stride dt sum_w -m_w a_w . v_w over their particles, a_w the
+        fluid's force on w over m_w and v_w their velocity at the step's midpoint (the corrector's
+        rates): the energy the fluid may gain (health.census_check)."""
         i = wp.tid()
         if not moving(laws, ptype, body, i):
             return
-        wp.atomic_add(total, slot, -clock[DT] * wp.float64(mass[i] * wp.dot(acc[i], vel[i])))
+        wp.atomic_add(total, slot, -wp.float64(stride) * clock[DT] * wp.float64(mass[i] * wp.dot(acc[i], vel[i])))
 
     def law_list(motions: list) -> list:
         """The Law of each of ``motions`` by body id (None: fixed), at least one."""

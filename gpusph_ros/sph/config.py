@@ -339,13 +339,10 @@ class SolverConfig(Numerics, HealthLimits, Domain):
                 raise ConfigError("periodic", self.periodic,
                                   f"periodic axes at least {shortest / (2 * self.h):.2f} kernel supports "
                                   f"({shortest:.4g} m) long; axis {axis} is shorter")
-        if any(m is not None for m in self.motions):
-            # mDBC's ghost nodes are offsets fixed at the start, and a zone's levels step at their own rates
-            if self.boundary == "mdbc":
-                raise ConfigError("boundary", self.boundary, "dynamic or adami: a scene with a moving body (mdbc's "
-                                                             "ghost nodes do not follow it yet)")
-            if self.zones:
-                raise ConfigError("zones", len(self.zones), "none: refinement zones do not take a moving body yet")
+        # mDBC's ghost nodes are offsets fixed at the start
+        if any(m is not None for m in self.motions) and self.boundary == "mdbc":
+            raise ConfigError("boundary", self.boundary, "dynamic or adami: a scene with a moving body (mdbc's "
+                                                         "ghost nodes do not follow it yet)")
         for k, plane in enumerate(self.planes):
             normal = getattr(plane, "normal", None)
             try:

@@ -40,7 +40,9 @@ Faults of the whole state:
   every term of the scheme conserves or dissipates it, so growth is the integrator going unstable;
 - excluded_fraction: the excluded fluid would pass ``max_excluded_fraction`` of the fluid mass;
 - zone_reserve: a refinement level needed more particles than the build reserved for it
-  (levels.py: fluid arriving at a zone gets fine particles in slots reserved for them).
+  (levels.py: fluid arriving at a zone gets fine particles in slots reserved for them);
+- zone_edge: a moving body came within levels.edge_margin of a refinement zone's face (a body
+  crossing from one level to another is not carried: levels.py).
 """
 
 import functools
@@ -55,9 +57,9 @@ BOUNDARY = state.BOUNDARY
 
 # the checks, in the order they are reported; each name's index is its slot in ``fail``
 CHECKS = ("non_finite", "outside_domain", "density_bounds", "wall_penetration", "displacement", "clumping",
-          "energy_growth", "excluded_fraction", "zone_reserve")
+          "energy_growth", "excluded_fraction", "zone_reserve", "zone_edge")
 (NON_FINITE, OUTSIDE_DOMAIN, DENSITY_BOUNDS, WALL_PENETRATION, DISPLACEMENT, CLUMPING, ENERGY_GROWTH,
- EXCLUDED_FRACTION, ZONE_RESERVE) = range(len(CHECKS))
+ EXCLUDED_FRACTION, ZONE_RESERVE, ZONE_EDGE) = range(len(CHECKS))
 N_CHECKS = len(CHECKS)
 # the faults of one particle, which exclude a fluid particle; their index is their slot in ``fail``
 REASONS = CHECKS[:DISPLACEMENT + 1]

@@ -170,6 +170,7 @@ class Solver:
             self._laws = wp.array(self._law_list, dtype=B.Law, device=dev)
             self._series = wp.array(bodies.series_table(cfg.motions), dtype=wp.float64, device=dev)
             self._rest = arr(np.asarray(particles.pos, dtype=np.float64), wp.vec3d)
+            self._moves = wp.array([int(m is not None) for m in cfg.motions], dtype=wp.int32, device=dev)
             nb = len(cfg.motions)
             self._poses = wp.zeros(nb, dtype=B.Pose, device=dev)
             # the floating bodies' state, half step and candidate, and the last evaluation's force
@@ -254,7 +255,8 @@ class Solver:
             self.launch(k.sps_strain, n, [p, nl.grid, nl.nbr, nl.count, f, which])
         self.launch(k.interact, n, [p, nl.grid, nl.nbr, nl.count, f, self._plane_pt, self._plane_n, self.acc,
                                     self._drho, self._xsph, self._shift, self._maxima, self._clumped, which])
-        self._body_wrench(f)
+        if which == EVERY_LEVEL:  # a floating body steps with the passes over every level (_two_rates)
+            self._body_wrench(f)
 
     def _integrate(self, factor: float, base, vel_rate, out, which: int = EVERY_LEVEL):
         """out = base advanced by ``factor`` of each selected particle's own step (passes.integrate)
@@ -292,10 +294,7 @@ class Solver:
             self._forces(self._fields_h)
             self._integrate(1.0, state, self._vel_h, candidate)
             self._move_walls(1.0, *candidate[:2], into=2)
-            if self._moving:
-                wp.launch(bodies.build(self.scalar).work_on_fluid, dim=n,
-                          inputs=[self._laws, self._clock, self.ptype, self.body, self.mass, self.acc, self._vel_h,
-                                  self._energy_sum, health.WORK], device=dev)
+            self._work_on_fluid()
         else:
             self._two_rates(state, half, candidate)
         wp.launch(k.check_particles, dim=n,
@@ -319,6 +318,14 @@ class Solver:
                                          _CENSUS_EVERY, self.config.shepard_every, block], device=dev)
         self.neighbours.moved(self.pos, self.vel, self._clock)
         wp.capture_if(self.flag(SHEPARD_DUE), on_true=self.shepard_filter, rebuild=False)
+
+    def _work_on_fluid(self):
+        """The moving bodies' work on the fluid over the step (bodies.work_on_fluid), from the rates
+        just evaluated at its midpoint over every level."""
+        if self._moving:
+            wp.launch(bodies.build(self.scalar).work_on_fluid, dim=self.n,
+                      inputs=[self._laws, self._clock, self.params.coarse_stride, self.ptype, self.body, self.mass,
+                              self.acc, self._vel_h, self._energy_sum, health.WORK], device=self.device)
 
     def _move_walls(self, factor: float, pos, vel, into: int = 0):
         """The moving bodies' poses at t + factor dt (bodies.body_poses: a floating body's state
@@ -443,26 +450,38 @@ class Solver:
             t + dt:   fine state, coarse predictor x + dt (rates at t)     -> every level's rates
             t + 3dt/2: fine half step, coarse at x + 3dt/2 (midpoint rates) -> fine rates
             t + 2dt:  both levels' candidates
+
+        A moving body stands on its pose at each of those times (its particles of every level: the
+        integration leaves a boundary particle where its base state has it). A floating body steps
+        as a coarse particle does, its predictor to t + dt with the force at t and its corrector to
+        t + 2dt with the force at t + dt, both from the passes over every level; between, it is on
+        that path (at t + dt/2 on the predictor's, at t + 3dt/2 on the corrector's).
         """
         self._integrate(0.5, state, self.vel, half, FINEST_LEVEL)
         self._integrate(0.25, state, self.vel, half, COARSER_LEVELS)
+        self._move_walls(0.5, *half[:2], into=1)
         self._walls_again(self._fields_h)
         self._forces(self._fields_h, FINEST_LEVEL)
         self._integrate(1.0, state, self._vel_h, candidate, FINEST_LEVEL)  # the fine state at t + dt
+        self._move_walls(1.0, *candidate[:2], into=1)
         # walls set from the fluid (mDBC) take the fine state; what the coarse walls take there, from
         # no coarse state, the coarse passes below overwrite from the launch's start
         self.boundary.before_forces(self, self._fields_c)
         for dst, src in zip(half, candidate):
             wp.copy(dst, src)
         self._integrate(0.5, state, self.vel, half, COARSER_LEVELS)
+        self._move_walls(1.0, *half[:2], into=1)
         self._walls_again(self._fields_h)
         self._forces(self._fields_h)
+        self._work_on_fluid()
         self._integrate(1.0, state, self._vel_h, candidate, COARSER_LEVELS)
         self._integrate(0.75, state, self._vel_h, half, COARSER_LEVELS)
         self._integrate(0.5, candidate, self._vel_c, half, FINEST_LEVEL)
+        self._move_walls(1.5, *half[:2], into=2)
         self._walls_again(self._fields_h)
         self._forces(self._fields_h, FINEST_LEVEL)
         self._integrate(1.0, candidate, self._vel_h, candidate, FINEST_LEVEL)
+        self._move_walls(2.0, *candidate[:2], into=2)
 
     def _relevel(self):
         """Each fluid particle's level kind from where it stands, daughters for the fluid that
@@ -470,6 +489,10 @@ class Solver:
         than rho0 (levels.py)."""
         n, dev, p, L = self.n, self.device, self.params, levels.build(self.scalar)
         self._floor_walls()
+        if self._moving:
+            wp.launch(L.bodies_off_edges, dim=n, inputs=[p, self.pos, self.ptype, self.body, self._moves, self.ids,
+                                                         self._zone_lo, self._zone_hi, self._zone_h, self._fail,
+                                                         health.ZONE_EDGE], device=dev)
         wp.launch(L.relevel, dim=n, inputs=[p, self.pos, self.hsml, self.ptype, self._needs_list,
                                             self._zone_lo, self._zone_hi, self._zone_h, self._spawned, self._want,
                                             self._vacant], device=dev)
@@ -524,6 +547,9 @@ class Solver:
             if check == "zone_reserve":
                 detail = ("the fluid reaching a refinement zone (refine:) needs more fine particles than the "
                           "build reserved for it")
+            if check == "zone_edge":
+                detail = ("a moving body came to a refinement zone's face: a body stays inside its zone or clear "
+                          "of it by levels.edge_margin (a larger zone about it, or one farther off)")
             if check == "clumping":
                 clumped = self._energy_sum.numpy()[health.PEAK_CLUMPED]
                 detail = (f"{clumped:.1%} of the fluid particles have a neighbour closer than "

@@ -206,7 +206,7 @@ def label(row) -> str:
 
 ABBREVIATIONS = {"non_finite": "N", "outside_domain": "O", "density_bounds": "D", "wall_penetration": "W",
                  "displacement": "M", "clumping": "C", "energy_growth": "E", "excluded_fraction": "X",
-                 "zone_reserve": "Z", "neighbour_overflow": "L", "": ""}
+                 "zone_reserve": "Z", "zone_edge": "B", "neighbour_overflow": "L", "": ""}
 
 
 def chart(rows, path):
