@@ -50,6 +50,16 @@ def hydrostatic_errors(snap: dict, dim: int, h: float, depth: float, rho0: float
 KINDS = ("unit", "physics", "ros", "study")
 
 
+def planned_bytes(solver) -> int:
+    """The solver's device memory with its lists as wide as the plan prices them (the lattice's
+    estimate, resources.device_bytes); it measures its own lists, narrower (sph/neighbours.py)."""
+    from gpusph_ros.sph.neighbours import default_max_neighbours
+
+    cfg = solver.config
+    width = default_max_neighbours(cfg.dim, cfg.hdx, solver.finest, solver.params.coarse_stride)
+    return solver.device_bytes() + 4 * solver.n * (width - solver.neighbours.max_neighbours)
+
+
 def pytest_collection_modifyitems(config, items):
     """Each test is of exactly one kind (pytest.ini), so the kinds together are the whole suite."""
     wrong = [f"{item.nodeid}: {kinds or 'none'}" for item in items

@@ -126,3 +126,77 @@ def test_no_kernel_forms_a_particle_times_list_width_index():
                 if isinstance(inner, ast.arg) and inner.arg == "nbr":
                     assert "array2d" in ast.unparse(inner.annotation), f"{path.name} {node.name}"
     assert device_functions > 50 and reads >= 9
+
+
+COLUMN = {"name": "tank", "dim": 2, "tank": [0.6, 0.32], "fluid": [{"name": "water", "lo": [0.0, 0.0],
+                                                                     "hi": [0.12, 0.2]}]}
+ZONED = {**COLUMN, "refine": [{"name": "downstream", "lo": [0.2, 0.0], "hi": [0.6, 0.32], "ratio": 0.5}]}
+
+
+@pytest.mark.parametrize("scene, dx, outputs", [(COLUMN, 0.01, 6), (ZONED, 0.02, 20)])
+def test_lists_widened_as_they_grow_step_as_lists_wide_from_the_start(monkeypatch, scene, dx, outputs):
+    """Lists as wide as their longest at the start (no margin) overflow as a column collapses (and,
+    zoned, as the zone's reserved slots fill); each overflowing step is not committed, the lists
+    are widened to the longest and the step taken again, on the same cadence: the run is the run
+    of lists wide enough from the start (the lattice's estimate, fixed), bit for bit."""
+    from gpusph_ros.scenes.build import build
+    from gpusph_ros.scenes.schema import parse_scene
+    from gpusph_ros.sph import neighbours
+
+    model = build(parse_scene(scene), dx=dx)
+    wide = Solver(model.config, model.particles, max_neighbours=neighbours.default_max_neighbours(
+        2, model.config.hdx, 0.5 if "refine" in scene else 1.0, model.config.multirate + 1 if "refine" in scene else 1))
+    monkeypatch.setattr(neighbours, "WIDTH_MARGIN", 1.0)
+    grown = Solver(model.config, model.particles)
+    start = grown.neighbours.max_neighbours
+    for solver in (wide, grown):
+        for k in range(1, outputs + 1):
+            solver.advance(0.01 * k)
+    assert grown.neighbours.max_neighbours > start and grown.steps == wide.steps > 100
+    for name in ("pos", "vel", "rho", "ptype"):
+        np.testing.assert_array_equal(grown.snapshot()[name], wide.snapshot()[name])
+
+
+def test_measured_lists_are_narrower_than_the_lattices_estimate_and_a_fixed_width_that_overflows_stops():
+    """A 2D column at rest lists at most 24 (the lattice's estimate is 72): its lists are 1.6 times
+    that, 40. Lists of a width given by the caller are not widened: the step that overflows them
+    stops the run, naming the width, with the state before it kept."""
+    from gpusph_ros.scenes.build import build
+    from gpusph_ros.scenes.schema import parse_scene
+    from gpusph_ros.sph import NeighbourOverflow
+    from gpusph_ros.sph.neighbours import measured_width
+
+    model = build(parse_scene(COLUMN), dx=0.01)
+    wide = Solver(model.config, model.particles, max_neighbours=72)
+    wide.neighbours.rebuild(wide.pos, force=True)
+    longest = int(wide.neighbours.count.numpy().max())
+    solver = Solver(model.config, model.particles)
+    assert longest == 24 and solver.neighbours.max_neighbours == measured_width(longest) == 40
+    fixed = Solver(model.config, model.particles, max_neighbours=longest)
+    with pytest.raises(NeighbourOverflow) as err:
+        fixed.advance(0.1)
+    assert f"fixed {longest}" in str(err.value)
+    assert 0.0 < fixed.time < 0.1 and np.isfinite(fixed.snapshot()["pos"]).all()
+
+
+def test_a_checkpoint_of_widened_lists_restores_them_as_wide(monkeypatch):
+    """A state taken after the lists were widened, put into a new solver (lists as its particles
+    measure them at the start), widens its lists as they were and steps on as the run it was taken
+    from, bit for bit."""
+    from gpusph_ros.scenes.build import build
+    from gpusph_ros.scenes.schema import parse_scene
+    from gpusph_ros.sph import checkpoint, neighbours
+
+    monkeypatch.setattr(neighbours, "WIDTH_MARGIN", 1.0)
+    model = build(parse_scene(COLUMN), dx=0.01)
+    first = Solver(model.config, model.particles)
+    first.advance(0.04)
+    state = checkpoint.capture(first)
+    second = Solver(model.config, model.particles)
+    assert second.neighbours.max_neighbours < first.neighbours.max_neighbours
+    checkpoint.restore(second, state)
+    assert second.neighbours.max_neighbours == first.neighbours.max_neighbours
+    for solver in (first, second):
+        solver.advance(0.06)
+    for name in ("pos", "vel", "rho"):
+        np.testing.assert_array_equal(first.snapshot()[name], second.snapshot()[name])

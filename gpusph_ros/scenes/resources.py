@@ -5,8 +5,9 @@ exhausting the machine.
 
 Memory per particle (measured with ``Solver.device_bytes`` on DamBreak 1 and the 2D collapse, and
 checked by the tests): the neighbour list, 4 bytes x ``default_max_neighbours`` (248 in 3D, 72 in
-2D at h = 1.3 dx), and 66 scalars of state, half-step, candidate and scratch arrays plus 68 bytes
-of integers. Building the particles on the host takes about HOST_BYTES a particle more.
+2D at h = 1.3 dx: the most a run's lists may widen to; the solver measures its own, narrower at the
+start, sph/neighbours.py), and 66 scalars of state, half-step, candidate and scratch arrays plus 68
+bytes of integers. Building the particles on the host takes about HOST_BYTES a particle more.
 Refinement zones are counted exactly as they are split, each level before it is made
 (``check_count``, from refine.split), with the wider lists a refined run holds.
 """

@@ -56,9 +56,15 @@ NOT_STORED = ("neighbours.nbr", "neighbours._pos_sorted", "neighbours._ptype_sor
 LISTS = "neighbours.nbr_used"
 
 
-def _used(nl, count) -> np.ndarray:
-    """Which entries of the fixed-width lists (n x max_neighbours) hold a neighbour."""
-    return np.arange(nl.max_neighbours)[None, :] < np.asarray(count)[:, None]
+def _used(width: int, count) -> np.ndarray:
+    """Which entries of lists ``width`` wide (n x width) hold a neighbour."""
+    return np.arange(width)[None, :] < np.asarray(count)[:, None]
+
+
+def _width(state) -> "int | None":
+    """The width of the lists ``state`` was taken from (the solver measures its own: neighbours.py)."""
+    width = state["host"].get("neighbours", {}).get("max_neighbours") if isinstance(state["host"], dict) else None
+    return width if isinstance(width, int) and not isinstance(width, bool) and width > 0 else None
 
 
 def _host(solver) -> dict:
@@ -76,7 +82,7 @@ def capture(solver) -> dict:
     wp.synchronize_device(solver.device)
     arrays = {path: a.numpy().copy() for path, a in _stored(solver).items()}
     nl = solver.neighbours
-    arrays[LISTS] = nl.nbr.numpy()[_used(nl, arrays["neighbours.count"])]
+    arrays[LISTS] = nl.nbr.numpy()[_used(nl.max_neighbours, arrays["neighbours.count"])]
     return {"arrays": arrays, "host": _host(solver)}
 
 
@@ -92,9 +98,11 @@ def mismatch(solver, state) -> str:
         data = state["arrays"][path]
         if not isinstance(data, np.ndarray) or data.shape[:target.ndim] != target.shape:  # (n,) of vectors: (n, 3)
             return f"{path} has shape {getattr(data, 'shape', None)}, this solver's {target.shape}"
-    nl, count = solver.neighbours, state["arrays"]["neighbours.count"]
-    if count.min(initial=0) < 0 or count.max(initial=0) > nl.max_neighbours:
-        return f"neighbours.count lies outside [0, {nl.max_neighbours}]"
+    nl, count, width = solver.neighbours, state["arrays"]["neighbours.count"], _width(state)
+    if width is None:
+        return "it holds no width of its neighbour lists (neighbours.max_neighbours)"
+    if count.min(initial=0) < 0 or count.max(initial=0) > width:
+        return f"neighbours.count lies outside [0, {width}]"
     lists, used = state["arrays"][LISTS], int(count.sum())
     if not isinstance(lists, np.ndarray) or lists.shape != (used,) or not 0 <= lists.min(initial=0) <= lists.max(
             initial=0) < nl.n:
@@ -120,12 +128,16 @@ def restore(solver, state: dict):
 
 
 def put(solver, state: dict):
-    """Put ``state`` into ``solver``, which ``mismatch`` has found it fits."""
+    """Put ``state`` into ``solver``, which ``mismatch`` has found it fits; its lists as wide as
+    they were."""
+    nl = solver.neighbours
+    width = _width(state)
+    if width != nl.max_neighbours:
+        solver.resize_lists(width)
     for path, target in _stored(solver).items():
         wp.copy(target, wp.array(state["arrays"][path], dtype=target.dtype, device=target.device))
-    nl = solver.neighbours
     lists = np.array(nl.nbr.numpy())
-    lists[_used(nl, state["arrays"]["neighbours.count"])] = state["arrays"][LISTS]
+    lists[_used(width, state["arrays"]["neighbours.count"])] = state["arrays"][LISTS]
     nl.nbr.assign(lists)
     for holder, obj in (("solver", solver), ("neighbours", nl)):
         for name, value in state["host"][holder].items():

@@ -42,7 +42,9 @@ Faults of the whole state:
 - zone_reserve: a refinement level needed more particles than the build reserved for it
   (levels.py: fluid arriving at a zone gets fine particles in slots reserved for them);
 - zone_edge: a moving body came within levels.edge_margin of a refinement zone's face (a body
-  crossing from one level to another is not carried: levels.py).
+  crossing from one level to another is not carried: levels.py);
+- neighbour_overflow: a particle has more neighbours than the lists hold (neighbours.py); the solver
+  widens them and takes the step again, unless their width was fixed.
 """
 
 import functools
@@ -57,9 +59,9 @@ BOUNDARY = state.BOUNDARY
 
 # the checks, in the order they are reported; each name's index is its slot in ``fail``
 CHECKS = ("non_finite", "outside_domain", "density_bounds", "wall_penetration", "displacement", "clumping",
-          "energy_growth", "excluded_fraction", "zone_reserve", "zone_edge")
+          "energy_growth", "excluded_fraction", "zone_reserve", "zone_edge", "neighbour_overflow")
 (NON_FINITE, OUTSIDE_DOMAIN, DENSITY_BOUNDS, WALL_PENETRATION, DISPLACEMENT, CLUMPING, ENERGY_GROWTH,
- EXCLUDED_FRACTION, ZONE_RESERVE, ZONE_EDGE) = range(len(CHECKS))
+ EXCLUDED_FRACTION, ZONE_RESERVE, ZONE_EDGE, NEIGHBOUR_OVERFLOW) = range(len(CHECKS))
 N_CHECKS = len(CHECKS)
 # the faults of one particle, which exclude a fluid particle; their index is their slot in ``fail``
 REASONS = CHECKS[:DISPLACEMENT + 1]

@@ -12,6 +12,14 @@ step sorts nothing. A reorder (solver.py) builds from its own sort.
 
 Periodic axes wrap both the cell search and the separation vector (minimum image).
 
+The lists' width is measured (Solver): a first build into lists one long counts the longest list,
+and the lists are then WIDTH_MARGIN times that (the plan prices them at the lattice's estimate,
+``default_max_neighbours``, the most they may widen to before a fixed width would have overflowed).
+A build that finds a longer list stops its step before any pass writes the state (the loop's
+LISTS_HOLD flag, a health flag); the solver widens the lists to WIDTH_MARGIN times the longest and
+takes the step again, the same step, so that a run is bit for bit the run of lists wide enough from
+the start. A caller's fixed width is not widened: the run stops (NeighbourOverflow).
+
 Where particles differ in smoothing length (refinement levels, levels.py) the cells are sized by
 the smallest and a particle searches as many cells each way as its own list radius needs (a passive
 one, the largest's): sized by the largest, a fine particle tested 8x the candidates of a uniform
@@ -38,6 +46,15 @@ LIST_SKIN = 1.1
 # (1/2) and, where a launched step spans two of the finest level's (multirate), 3/2; with room for
 # the step growing, the acceleration, XSPH and shifting
 LOOKAHEAD_SAFETY = 1.5
+# a list's width over the longest list the last count measured (at the start, or the build that
+# overflowed): 1.6 times the longest at rest held every uniform run measured over its whole course
+# (DamBreak 1 at 3 cm: 102 at rest, 133 at most; docs/results/speed.md)
+WIDTH_MARGIN = 1.6
+
+
+def measured_width(longest: int) -> int:
+    """The lists' width for a longest list of ``longest``: WIDTH_MARGIN times it, a multiple of 8."""
+    return int(8 * math.ceil(WIDTH_MARGIN * max(longest, 1) / 8))
 
 
 def list_skin(substeps: int = 1) -> float:
@@ -230,9 +247,12 @@ def build(scalar):
                        end: wp.array(dtype=wp.int32), nbr: wp.array2d(dtype=wp.int32),
                        count: wp.array(dtype=wp.int32), needs_list: wp.array(dtype=wp.int32),
                        ghost: wp.array(dtype=vec), x_build: wp.array(dtype=vec),
-                       overflow: wp.array(dtype=wp.int32), chunk: int, stride: int):
+                       overflow: wp.array(dtype=wp.int32), fail: wp.array(dtype=wp.int32), fail_slot: int,
+                       hold: wp.array(dtype=wp.int32), chunk: int, stride: int):
         """A particle's list: every candidate within the list radius of it or, for a boundary
-        particle with a ghost node (mdbc.py, at ``ghost`` from it; zero otherwise), of that node."""
+        particle with a ghost node (mdbc.py, at ``ghost`` from it; zero otherwise), of that node.
+        A list longer than the width flags ``fail_slot`` and clears ``hold`` (the step stops) and
+        keeps the longest such list in ``overflow``."""
         # walk particles in cell order, reading the candidates' positions in that order too:
         # the candidates of one cell lie next to each other in memory
         ki = wp.tid() * stride + chunk
@@ -298,6 +318,8 @@ def build(scalar):
                                     n += 1
         if n > grid.max_neighbours:
             wp.atomic_max(overflow, 0, n)
+            wp.atomic_min(fail, fail_slot, i)
+            hold[0] = 0
             n = grid.max_neighbours
         count[i] = n
 
@@ -324,13 +346,16 @@ class NeighbourList:
 
     def __init__(self, scalar, dim: int, support: float, lo, hi, periodic, ptype: wp.array,
                  needs_list: wp.array, ghost: wp.array, max_neighbours: int, launcher, hsml: wp.array,
-                 variable: bool = False, substeps: int = 1, neighbour_major: "bool | None" = None):
+                 variable: bool = False, substeps: int = 1, neighbour_major: "bool | None" = None,
+                 fail: "wp.array | None" = None, fail_slot: int = 0, hold: "wp.array | None" = None):
         """``ptype``, ``needs_list`` and ``ghost`` (each particle's ghost-node offset, see
         neighbour_list) are the solver's own device arrays (it may reorder them); ``hsml``, each
         particle's smoothing length, which a pair's radius follows where ``variable`` (they differ:
         ``support`` is then the largest's); ``substeps``, the finest level's steps one launched
         step spans (2 with multirate), whose force passes all read these lists;
-        ``neighbour_major``, the lists' layout (lists_array), by default the device's."""
+        ``neighbour_major``, the lists' layout (lists_array), by default the device's; ``fail``
+        and ``fail_slot``, where a list that overflows its width is flagged (the solver's health
+        flags) and ``hold`` cleared (the step loop's flag that lets a step go on past its lists)."""
         self._passes = build(scalar)
         Grid = self._passes.Grid
         n = needs_list.shape[0]
@@ -376,6 +401,9 @@ class NeighbourList:
         self.nbr = lists_array(n, max_neighbours, device, self.neighbour_major)
         self.count = wp.zeros(n, dtype=wp.int32, device=device)
         self.overflow = wp.zeros(1, dtype=wp.int32, device=device)
+        self._fail = fail if fail is not None else wp.zeros(1, dtype=wp.int32, device=device)
+        self._fail_slot = fail_slot
+        self._hold = hold if hold is not None else wp.ones(1, dtype=wp.int32, device=device)
         self._needs_list = needs_list
         self._ghost = ghost
         self._ptype = ptype
@@ -434,7 +462,8 @@ class NeighbourList:
         self.launcher(self._passes.neighbour_list, n, [self.grid, self._pos_sorted, self._ptype_sorted,
                                                        self._hsml_sorted, self._order,
                                                        self._start, self._end, self.nbr, self.count, self._needs_list,
-                                                       self._ghost, self._x_build, self.overflow])
+                                                       self._ghost, self._x_build, self.overflow, self._fail,
+                                                       self._fail_slot, self._hold])
         wp.launch(self._passes.mark_built, dim=1, inputs=[self.stale, self.builds], device=self.device)
 
     def rebuild(self, pos: wp.array, force: bool = False):
@@ -445,6 +474,16 @@ class NeighbourList:
         if force:
             self.stale.fill_(1)
         wp.capture_if(self.stale, on_true=self._build, pos=pos)
+
+    def resize(self, width: int):
+        """Lists ``width`` long, to be built before they are read (stale)."""
+        self.max_neighbours = self.grid.max_neighbours = int(width)
+        self.nbr = lists_array(self.n, self.max_neighbours, self.device, self.neighbour_major)
+        self.stale.fill_(1)
+
+    def longest(self) -> int:
+        """The longest list of the last build, or of the build that overflowed (a host read)."""
+        return max(int(self.count.numpy().max(initial=0)), int(self.overflow.numpy()[0]))
 
     def rebuild_sorted(self, pos: wp.array):
         """Build the lists of particles just put in the order of the last sort (a reorder), with

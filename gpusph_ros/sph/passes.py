@@ -432,16 +432,22 @@ def _time_passes(scalar):
         step would have ended; then say what comes next, on the device: whether the loop goes on
         (healthy, short of the target, time moving, fewer than ``block`` steps since the host last
         looked), whether the next step reorders and takes the census, and whether the Shepard
-        filter is due now (every ``shepard_every`` finest-level steps)."""
+        filter is due now (every ``shepard_every`` finest-level steps). A failed step leaves the
+        cadence where it was and filters nothing: taken again once its failure is cleared (lists
+        widened, a smaller dt_fixed), it is the step that failed."""
         m = p.coarse_stride
         moving = clock[DT] > wp.float64(0.0)
         if healthy(fail):
             if moving:
                 clock[T] = clock[T] + wp.float64(m) * clock[DT]
                 steps[STEP] = steps[STEP] + m
-        elif steps[FAILED_STEP] < 0:
-            steps[FAILED_STEP] = steps[STEP] + m
-            clock[T_FAILED] = clock[T] + wp.float64(m) * clock[DT]
+        else:
+            if steps[FAILED_STEP] < 0:
+                steps[FAILED_STEP] = steps[STEP] + m
+                clock[T_FAILED] = clock[T] + wp.float64(m) * clock[DT]
+            flags[RUNNING] = 0
+            flags[SHEPARD_DUE] = 0
+            return
         launched = steps[LAUNCHED] + 1
         steps[LAUNCHED] = launched
         steps[IN_BLOCK] = steps[IN_BLOCK] + 1

@@ -19,7 +19,7 @@ from .config import RESET_FIELDS, SolverConfig, check_device
 from .health import HealthError
 from .kernels import COARSER_LEVELS, EVERY_LEVEL, FINEST_LEVEL
 from .launch import Launcher
-from .neighbours import NeighbourList, NeighbourOverflow, default_max_neighbours
+from .neighbours import NeighbourList, NeighbourOverflow, measured_width
 from .particles import Particles
 from .state import (
     CENSUS_DUE,
@@ -28,6 +28,7 @@ from .state import (
     EXCLUDED,
     FAILED_STEP,
     FLUID,
+    LISTS_HOLD,
     N_CLOCK,
     N_FLAGS,
     N_STEPS,
@@ -86,10 +87,18 @@ class Solver:
         self._allocate(particles)
         self.neighbours = NeighbourList(self.scalar, cfg.dim, 2.0 * cfg.h, cfg.domain_lo, cfg.domain_hi,
                                         cfg.periodic, self.ptype, self._needs_list, self.ghost,
-                                        max_neighbours or default_max_neighbours(cfg.dim, cfg.hdx, self.finest,
-                                                                                  self.params.coarse_stride),
-                                        self.launch, self.hsml, self.params.variable_h != 0,
-                                        self.params.coarse_stride)
+                                        max_neighbours or 1, self.launch, self.hsml, self.params.variable_h != 0,
+                                        self.params.coarse_stride, fail=self._fail,
+                                        fail_slot=health.NEIGHBOUR_OVERFLOW, hold=self.flag(LISTS_HOLD))
+        # the lists' width: the caller's, fixed, or measured on the particles as built (a first build
+        # into lists one long counts the longest: neighbours.longest) and widened whenever a list
+        # outgrows it
+        self._measured_width = max_neighbours is None
+        if self._measured_width:
+            self.neighbours.rebuild(self.pos, force=True)
+            self.neighbours.resize(measured_width(self.neighbours.longest()))
+            self.neighbours.builds.zero_()
+            self.clear_failure()
         self._step_hooks = []
         self._graph = graph.LoopGraph(self)
         self.time, self.dt, self.dt_stable, self.steps = 0.0, 0.0, 0.0, 0
@@ -223,7 +232,7 @@ class Solver:
         self._steps = arr(steps, wp.int32)
         # the step loop's flags (state.RUNNING ...): the first step reorders and takes the census
         flags = np.zeros(N_FLAGS, dtype=np.int32)
-        flags[[REORDER_DUE, CENSUS_DUE]] = 1
+        flags[[REORDER_DUE, CENSUS_DUE, LISTS_HOLD]] = 1
         self._flags = arr(flags, wp.int32)
         self._flag_views = tuple(self._flags[k:k + 1] for k in range(N_FLAGS))
         wp.launch(self._passes.equation_of_state, dim=n, inputs=[self.params, self.fields], device=dev)
@@ -278,10 +287,21 @@ class Solver:
         """One step towards the clock's TARGET, every decision in it taken on the device (the
         branches on the step loop's flags), so that a captured graph can replay it. ``block``:
         how many steps since the loop started the device may take before it stops for the host."""
-        n, dev, p, k = self.n, self.device, self.params, self._passes
         wp.capture_if(self.flag(REORDER_DUE), on_true=self._reorder)
         self._move_walls(0.0, self.pos, self.vel)  # the walls' acceleration in this slot order too
         self.neighbours.rebuild(self.pos)
+        # a list that overflowed stops the step here, before any pass writes the state (the walls,
+        # the passive particles): widened, the lists take the same step again (_sync)
+        wp.capture_if(self.flag(LISTS_HOLD), on_true=self._evolve)
+        wp.launch(self._passes.tick, dim=1, inputs=[self.params, self._fail, self._clock, self._steps, self._flags,
+                                                    _REORDER_EVERY, _CENSUS_EVERY, self.config.shepard_every, block],
+                  device=self.device)
+        self.neighbours.moved(self.pos, self.vel, self._clock)
+        wp.capture_if(self.flag(SHEPARD_DUE), on_true=self.shepard_filter, rebuild=False)
+
+    def _evolve(self):
+        """The step from its lists on: rates, the predictor-corrector, the checks and the commit."""
+        n, dev, p, k = self.n, self.device, self.params, self._passes
         self._maxima.zero_()
         self.boundary.before_forces(self, self.fields)
         self._forces(self.fields)
@@ -314,10 +334,6 @@ class Solver:
             self._relevel()
         for hook in self._step_hooks:
             hook()
-        wp.launch(k.tick, dim=1, inputs=[p, self._fail, self._clock, self._steps, self._flags, _REORDER_EVERY,
-                                         _CENSUS_EVERY, self.config.shepard_every, block], device=dev)
-        self.neighbours.moved(self.pos, self.vel, self._clock)
-        wp.capture_if(self.flag(SHEPARD_DUE), on_true=self.shepard_filter, rebuild=False)
 
     def _work_on_fluid(self):
         """The moving bodies' work on the fluid over the step (bodies.work_on_fluid), from the rates
@@ -518,8 +534,10 @@ class Solver:
         self.launch(self._passes.shepard, self.n, [self.params, nl.grid, nl.nbr, nl.count, self.fields, self._rho_c])
         wp.copy(self.rho, self._rho_c)
 
-    def _sync(self):
-        """Read the clock and the health flags; raise if a step failed."""
+    def _sync(self) -> bool:
+        """Read the clock and the health flags; raise if a step failed. A list that outgrew its
+        measured width is widened (neighbours.measured_width of the longest) for the failed step
+        to be taken again, and the answer is True."""
         clock = self._clock.numpy()
         steps = self._steps.numpy()
         fail = self._fail.numpy()
@@ -527,6 +545,10 @@ class Solver:
         self.steps = int(steps[STEP])
         self._excluded_host = (self._excluded.numpy(), self._excluded_mass.numpy())
         self._census_host = self._energy_sum.numpy()
+        if fail[health.NEIGHBOUR_OVERFLOW] != health.NO_FAILURE and self._measured_width:
+            self.resize_lists(measured_width(self.neighbours.longest()))
+            self.clear_failure()
+            return True
         for check, idx in zip(health.CHECKS, fail):
             if idx == health.NO_FAILURE:
                 continue
@@ -554,12 +576,13 @@ class Solver:
                 clumped = self._energy_sum.numpy()[health.PEAK_CLUMPED]
                 detail = (f"{clumped:.1%} of the fluid particles have a neighbour closer than "
                           f"{self.config.clump_ratio:g} dx (more than {self.config.clump_fraction:.0%} allowed)")
+            if check == "neighbour_overflow":
+                raise NeighbourOverflow(f"a particle has {self.neighbours.longest()} neighbours at step "
+                                        f"{int(steps[FAILED_STEP])}, more than the lists' fixed "
+                                        f"{self.neighbours.max_neighbours}: particles have clumped, or raise "
+                                        f"max_neighbours")
             raise HealthError(check, int(steps[FAILED_STEP]), float(clock[T_FAILED]), int(idx), detail)
-        overflow = int(self.neighbours.overflow.numpy()[0])
-        if overflow:
-            raise NeighbourOverflow(f"a particle has {overflow} neighbours, more than the list's "
-                                    f"{self.neighbours.max_neighbours}: particles have clumped, or raise "
-                                    f"max_neighbours")
+        return False
 
     @property
     def excluded(self) -> dict:
@@ -639,10 +662,10 @@ class Solver:
                 self._graph.run(block)
             else:
                 wp.capture_while(self.flag(RUNNING), self.loop_body, block=block, interrupt=interrupt)
-            self._sync()
+            widened = self._sync()
             if self.reached(t_target) or (interrupt is not None and interrupt()):
                 break
-            if self.time <= before:
+            if self.time <= before and not widened:
                 raise RuntimeError(f"simulated time is stuck at {self.time!r} s short of {t_target!r} s")
             before = self.time
         return self.time
@@ -666,10 +689,11 @@ class Solver:
     def step(self) -> float:
         """One step of the adaptive size (or dt_fixed); returns the new time."""
         self._sync()
-        self.aim(math.inf)
-        self._launch_step()
-        self._sync()
-        return self.time
+        while True:  # again where the lists were widened
+            self.aim(math.inf)
+            self._launch_step()
+            if not self._sync():
+                return self.time
 
     # fields whose change needs new particles or new buffers: only a fresh Solver takes them
     REBUILD_FIELDS = RESET_FIELDS
@@ -683,9 +707,16 @@ class Solver:
         self.params = self._make_params()
         self._graph.drop()
 
+    def resize_lists(self, width: int):
+        """Neighbour lists ``width`` long, built before the next pass reads them; a captured step
+        loop, which holds the old lists, is captured again."""
+        self.neighbours.resize(width)
+        self._graph.drop()
+
     def clear_failure(self):
         """Forget a reported failure so the run can go on (e.g. after changing dt_fixed)."""
         self._fail.assign(np.full(health.N_CHECKS, health.NO_FAILURE, dtype=np.int32))
+        self.flag(LISTS_HOLD).fill_(1)
         self._pending.zero_()
         self._pending_mass.zero_()
         steps = self._steps.numpy()

@@ -32,9 +32,10 @@ N_CLOCK = 5
 STEP, FAILED_STEP, LAUNCHED, IN_BLOCK = range(4)
 N_STEPS = 4
 # slots of the step loop's flags, each the condition of a branch of the step (wp.capture_if) or of
-# the loop (wp.capture_while): go on stepping, and which passes this step or its end are due
-RUNNING, REORDER_DUE, CENSUS_DUE, SHEPARD_DUE = range(4)
-N_FLAGS = 4
+# the loop (wp.capture_while): go on stepping, which passes this step or its end are due, and
+# whether the lists hold every neighbour (0 once one overflowed: the step goes no further)
+RUNNING, REORDER_DUE, CENSUS_DUE, SHEPARD_DUE, LISTS_HOLD = range(5)
+N_FLAGS = 5
 
 
 @functools.lru_cache(maxsize=None)
