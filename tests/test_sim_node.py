@@ -652,3 +652,33 @@ def test_a_floating_box_takes_an_external_wrench_from_cmd_wrench(client, tmp_pat
     status = _diagnostic(client, lambda s: int(s.get("commands_refused_box", 0)) >= 1
                          and int(s.get("commands_taken_box", 0)) >= 1)
     assert status["level"] != DiagnosticStatus.ERROR
+
+
+def test_a_body_that_follows_a_tf_frame_runs_where_tf2_msgs_is_missing(client, node, tmp_path):
+    """PyPI has no tf2_msgs: a scene whose driven paddle follows a TF frame (``motion.frame``)
+    builds and steps, its pose published, and the log says the body takes cmd_pose and cmd_twist
+    only (where tf2_msgs is installed the node follows /tf: ros/frame_follow.py)."""
+    from geometry_msgs.msg import PoseStamped
+
+    scene = tmp_path / "followed.yaml"
+    scene.write_text(yaml.safe_dump({
+        "name": "followed", "dim": 2, "tank": [1.2, 0.5],
+        "fluid": [{"name": "water", "lo": [0.14, 0.0], "hi": [1.2, 0.3]}],
+        "obstacles": [{"name": "paddle", "lo": [0.1, 0.0], "hi": [0.14, 0.5],
+                       "motion": {"type": "driven", "max_speed": 0.5, "max_acceleration": 5.0,
+                                  "frame": "robot/paddle"}}]}))
+    pose_topic = "/sim_node/bodies/paddle/pose"
+    client.subscribe(pose_topic, PoseStamped, depth=10)
+    assert client.set_together(scene=str(scene), dx=0.04, end_time=1.0).successful
+    _pause_and_reset(client)
+    reply = client.call("step", Trigger)
+    assert reply.success, reply.message
+    assert client.wait_for(pose_topic)
+    try:
+        import tf2_msgs  # noqa: F401
+    except ImportError:
+        log = node[1]
+        deadline = time.time() + 10.0
+        while "motion.frame needs tf2_msgs" not in log.read_text() and time.time() < deadline:
+            time.sleep(0.2)
+        assert "paddle: motion.frame needs tf2_msgs" in log.read_text()

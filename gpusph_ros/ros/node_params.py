@@ -7,14 +7,13 @@ each entry of ``PARAMS`` and asks ``check`` before accepting a change, so a para
 """
 import dataclasses
 import math
-import re
 from dataclasses import dataclass
 from pathlib import Path
 
 from ..measure.cloud import FIELDS as PARTICLE_FIELDS
 from ..output.folders import folder_problem
 from ..scenes.reduce import MODELS
-from ..scenes.schema import MAX_PATH, builtin_names, load_scene
+from ..scenes.schema import FRAME_ID, MAX_FRAME_ID, MAX_PATH, builtin_names, load_scene
 from ..scenes.settings import COMPRESSIONS, STAMPS, resolve
 from ..sph.config import LIVE, RESET, ConfigError, SolverConfig, shown
 
@@ -115,12 +114,8 @@ def _device_names() -> list:
     return [d.alias for d in wp.get_devices()]
 
 
-# the longest text a parameter takes: a path (Linux's PATH_MAX), a frame id (tf2's frames are short
-# names; a 10^6-character one was written into every message, 590 MB of recording in 6 s)
-MAX_TEXT = {"scene": MAX_PATH, "record_dir": MAX_PATH, "state_file": MAX_PATH, "frame_id": 256}
-# a frame id by the ROS name rules (rcl's topic-name tokens, tf2's frames without a leading /): tokens of
-# letters, digits and _, none starting with a digit, joined by single /; no "__" (ROS 2 reserves it)
-FRAME_ID = re.compile(r"(?!.*__)[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*")
+# the longest text a parameter takes: a path (Linux's PATH_MAX), a frame id (schema.MAX_FRAME_ID)
+MAX_TEXT = {"scene": MAX_PATH, "record_dir": MAX_PATH, "state_file": MAX_PATH, "frame_id": MAX_FRAME_ID}
 
 
 def _check_one(p: Param, value):

@@ -52,7 +52,8 @@ from ..runner import CLOCK_QOS, LATCHED_QOS, PARTICLES_QOS, Run
 from ..sph import ConfigError
 from ..sph.bodies import quaternion_matrix
 from ..sph.config import shown
-from . import node_params
+from . import frame_follow, node_params
+from .frame_follow import FrameFollower
 from .node_params import PARAMS
 from .session import Session
 
@@ -130,6 +131,7 @@ class SimNode(LifecycleNode):
         self._diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         self.awaiting_reset = set()  # parameters changed since the last build that need one
         self._command_subs = {}  # the driven bodies' command subscriptions, (body, kind) -> subscription
+        self._follower = None  # the driven bodies that follow TF frames (frame_follow.py)
         self.commands = collections.Counter()  # (body, "taken" / "refused") -> commands
         self._commands_lock = threading.Lock()
         # the driven bodies' commands come to a node of their own, spun by one thread that takes and
@@ -253,6 +255,40 @@ class SimNode(LifecycleNode):
             self._command_subs[(name, "wrench")] = self._commands_node.create_subscription(
                 WrenchStamped, f"{self.namespace}/bodies/{name}/cmd_wrench",
                 functools.partial(self._command, name, "wrench"), 10)
+        self._follow(run)
+
+    def _follow(self, run):
+        """The driven bodies that follow a TF frame (``motion.frame``): ``/tf`` and ``/tf_static``
+        (frame_follow.py), where tf2_msgs is installed; where it is not, they take cmd_pose and
+        cmd_twist only, which the log says."""
+        follows = {o.name: o.motion.frame for o in run.model.scene.obstacles
+                   if o.name in run.drivers and o.motion.frame}
+        self._follower = FrameFollower(follows, run.frame_id) if follows else None
+        if not follows:
+            return
+        try:
+            from tf2_msgs.msg import TFMessage
+        except ImportError:
+            self.get_logger().error(f"{', '.join(follows)}: motion.frame needs tf2_msgs (ros-jazzy-tf2-msgs), "
+                                    "which is not installed; these bodies take cmd_pose and cmd_twist only")
+            return
+        for topic, static in (("/tf", False), ("/tf_static", True)):
+            self._command_subs[("tf", topic)] = self._commands_node.create_subscription(
+                TFMessage, topic, functools.partial(self._transforms, static),
+                _qos(reliable=True, depth=100, transient_local=static))
+
+    def _transforms(self, static: bool, msg):
+        """A TF message: each driven body whose frame it moves takes the frame's pose as a pose
+        command (frame_follow.py), counted and logged as a cmd_pose is."""
+        try:
+            run, follower = self.session.run, self._follower
+            if run is None or follower is None:
+                return
+            for body, result in follower.take(msg.transforms, static):
+                taken, why = frame_follow.command(run, body, result)
+                self._count(body, f"frame {follower.bodies[body]!r} on /tf", taken, why)
+        except Exception as err:  # a message the layers below did not foresee: logged, never an exit
+            self._internal("/tf", err)
 
     def _command(self, body: str, kind: str, msg):
         """A driven body's command or a floating body's external wrench (drive.py), in the published
@@ -289,11 +325,13 @@ class SimNode(LifecycleNode):
             self._internal(f"~/bodies/{body}/cmd_{kind}", err)
 
     def _count(self, body: str, kind: str, taken: bool, why: str):
-        """A command taken or refused, counted for /diagnostics; a refusal or a clamp logged."""
+        """A command taken or refused, counted for /diagnostics; a refusal or a clamp logged (``kind``:
+        pose, twist, wrench, or where a frame's pose came from)."""
         with self._commands_lock:
             self.commands[(body, "taken" if taken else "refused")] += 1
         if not taken or why != "taken":
-            self.get_logger().warning(f"~/bodies/{body}/cmd_{kind}: {why}", throttle_duration_sec=1.0)
+            where = f"~/bodies/{body}/cmd_{kind}" if kind in ("pose", "twist", "wrench") else f"{body}: {kind}"
+            self.get_logger().warning(f"{where}: {why}", throttle_duration_sec=1.0)
 
     def _make_publishers(self, run):
         """One publisher per topic of the scene's outputs (found from the outputs at t = 0);

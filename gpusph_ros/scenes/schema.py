@@ -16,6 +16,7 @@ A scene file may change another: ``base: dambreak1_lab`` and then only the keys 
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -464,11 +465,16 @@ MOTION_KEYS = {"translate": ("type", "velocity", "start"),
                "sinusoid": ("type", "amplitude", "period", "phase_deg", "angle_deg", "axis", "centre"),
                "move": ("type", "displacement", "duration", "start"),
                "driven": ("type", "max_speed", "max_acceleration", "max_angular_speed", "max_angular_acceleration",
-                          "timeout"),
+                          "timeout", "frame"),
                "series": ("type", "time", "x", "y", "z", "angle_deg", "axis", "centre", "file"),
                "piston": ("type", "wave_height", "period", "ramp", "depth"),
                "flap": ("type", "wave_height", "period", "ramp", "depth")}
 DRIVEN_TIMEOUT = 0.5  # [s] of simulated time a command is held before the body is brought to rest
+# a frame id by the ROS name rules (rcl's topic-name tokens, tf2's frames without a leading /): tokens of
+# letters, digits and _, none starting with a digit, joined by single /; no "__" (ROS 2 reserves it);
+# short (a 10^6-character frame_id was written into every message, 590 MB of recording in 6 s)
+FRAME_ID = re.compile(r"(?!.*__)[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*")
+MAX_FRAME_ID = 256
 MAX_SERIES_ROWS = 100_000  # samples of a series: a wavemaker's 10 minutes at 100 Hz is 60,000
 SERIES_CHANNELS = ("x", "y", "z", "angle_deg")
 
@@ -563,9 +569,14 @@ def _motion(where, value, obstacle, tank, dim, depth: float, g: float) -> bodies
     if kind == "driven":
         limits = {key: _number(f"{where}.{key}", item.get(key, 0.0), lo=0.0, lo_open=key in keys[1:3])
                   for key in keys[1:5]}
+        frame = item.get("frame", "")
+        if not isinstance(frame, str) or len(frame) > MAX_FRAME_ID or (frame and not FRAME_ID.fullmatch(frame)):
+            raise ConfigError(f"{where}.frame", frame, f"a TF frame id of at most {MAX_FRAME_ID} characters: "
+                                                       "names of letters, digits and _ (none starting with a "
+                                                       "digit) joined by /")
         return bodies.Motion(law="driven", centre=obstacle.centre(dim), **limits,
                              timeout=_number(f"{where}.timeout", item.get("timeout", DRIVEN_TIMEOUT), lo=0.0,
-                                             lo_open=True))
+                                             lo_open=True), frame=frame)
     if kind == "series":
         rows = _series(where, item, dim)
         axis = _axis(where, item, dim)

@@ -105,6 +105,7 @@ class Motion:
     max_angular_speed: float = 0.0
     max_angular_acceleration: float = 0.0
     timeout: float = 0.0
+    frame: str = ""  # driven: a TF frame whose pose in the world frame commands it (the node's), or none
     # series: rows (t, d_x, d_y, d_z, theta) [s, m, rad], d and theta 0 in the first
     series: tuple = ()
 
