@@ -200,3 +200,22 @@ def test_a_checkpoint_of_widened_lists_restores_them_as_wide(monkeypatch):
         solver.advance(0.06)
     for name in ("pos", "vel", "rho"):
         np.testing.assert_array_equal(first.snapshot()[name], second.snapshot()[name])
+
+
+def test_lists_are_widened_no_further_than_the_lattices_estimate():
+    """Particles packed at a third of the spacing (clumped, not a flow) list 9 times the lattice's
+    neighbours: the lists are not widened past the lattice's estimate (what the plan prices), and the
+    first step stops the run naming it."""
+    from gpusph_ros.sph import NeighbourOverflow
+
+    dx = 0.01
+    g = (np.arange(30) + 0.5) * dx / 3
+    x, y = np.meshgrid(g, g)
+    pos = np.column_stack([x.ravel() + 0.02, y.ravel() + 0.02, np.zeros(x.size)])
+    n = len(pos)
+    cfg = SolverConfig(dim=2, dx=dx, gravity=(0.0, -9.81, 0.0), domain_lo=(0.0, 0.0, -1.0), domain_hi=(0.14, 0.14, 1.0))
+    solver = Solver(cfg, Particles(pos=pos, vel=np.zeros((n, 3)), rho=np.full(n, 1000.0),
+                                   mass=np.full(n, 1000.0 * dx * dx / 9), ptype=np.zeros(n)))
+    assert solver.neighbours.max_neighbours == 72
+    with pytest.raises(NeighbourOverflow, match="the lattice's estimate, 72"):
+        solver.step()

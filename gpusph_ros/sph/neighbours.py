@@ -14,11 +14,13 @@ Periodic axes wrap both the cell search and the separation vector (minimum image
 
 The lists' width is measured (Solver): a first build into lists one long counts the longest list,
 and the lists are then WIDTH_MARGIN times that (the plan prices them at the lattice's estimate,
-``default_max_neighbours``, the most they may widen to before a fixed width would have overflowed).
+``default_max_neighbours``, the most they may widen to).
 A build that finds a longer list stops its step before any pass writes the state (the loop's
 LISTS_HOLD flag, a health flag); the solver widens the lists to WIDTH_MARGIN times the longest and
 takes the step again, the same step, so that a run is bit for bit the run of lists wide enough from
-the start. A caller's fixed width is not widened: the run stops (NeighbourOverflow).
+the start. They are widened no further than the lattice's estimate: a list longer than that is
+clumped particles, not a flow, and the run stops (NeighbourOverflow), as it does when the caller
+fixed the width.
 
 Where particles differ in smoothing length (refinement levels, levels.py) the cells are sized by
 the smallest and a particle searches as many cells each way as its own list radius needs (a passive

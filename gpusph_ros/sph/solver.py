@@ -19,7 +19,7 @@ from .config import RESET_FIELDS, SolverConfig, check_device
 from .health import HealthError
 from .kernels import COARSER_LEVELS, EVERY_LEVEL, FINEST_LEVEL
 from .launch import Launcher
-from .neighbours import NeighbourList, NeighbourOverflow, measured_width
+from .neighbours import NeighbourList, NeighbourOverflow, default_max_neighbours, measured_width
 from .particles import Particles
 from .state import (
     CENSUS_DUE,
@@ -92,11 +92,13 @@ class Solver:
                                         fail_slot=health.NEIGHBOUR_OVERFLOW, hold=self.flag(LISTS_HOLD))
         # the lists' width: the caller's, fixed, or measured on the particles as built (a first build
         # into lists one long counts the longest: neighbours.longest) and widened whenever a list
-        # outgrows it
+        # outgrows it, up to the lattice's estimate (what the plan prices; a list longer than that
+        # is clumped particles, not a flow)
         self._measured_width = max_neighbours is None
+        self._widest = default_max_neighbours(cfg.dim, cfg.hdx, self.finest, self.params.coarse_stride)
         if self._measured_width:
             self.neighbours.rebuild(self.pos, force=True)
-            self.neighbours.resize(measured_width(self.neighbours.longest()))
+            self.neighbours.resize(min(measured_width(self.neighbours.longest()), self._widest))
             self.neighbours.builds.zero_()
             self.clear_failure()
         self._step_hooks = []
@@ -545,8 +547,9 @@ class Solver:
         self.steps = int(steps[STEP])
         self._excluded_host = (self._excluded.numpy(), self._excluded_mass.numpy())
         self._census_host = self._energy_sum.numpy()
-        if fail[health.NEIGHBOUR_OVERFLOW] != health.NO_FAILURE and self._measured_width:
-            self.resize_lists(measured_width(self.neighbours.longest()))
+        if fail[health.NEIGHBOUR_OVERFLOW] != health.NO_FAILURE and self._measured_width \
+                and self.neighbours.longest() <= self._widest:
+            self.resize_lists(min(measured_width(self.neighbours.longest()), self._widest))
             self.clear_failure()
             return True
         for check, idx in zip(health.CHECKS, fail):
@@ -577,10 +580,11 @@ class Solver:
                 detail = (f"{clumped:.1%} of the fluid particles have a neighbour closer than "
                           f"{self.config.clump_ratio:g} dx (more than {self.config.clump_fraction:.0%} allowed)")
             if check == "neighbour_overflow":
+                limit = (f"the lattice's estimate, {self._widest}, which the lists are widened to at most"
+                         if self._measured_width else f"the lists' fixed {self.neighbours.max_neighbours}")
                 raise NeighbourOverflow(f"a particle has {self.neighbours.longest()} neighbours at step "
-                                        f"{int(steps[FAILED_STEP])}, more than the lists' fixed "
-                                        f"{self.neighbours.max_neighbours}: particles have clumped, or raise "
-                                        f"max_neighbours")
+                                        f"{int(steps[FAILED_STEP])}, more than {limit}: particles have clumped, "
+                                        f"or give max_neighbours")
             raise HealthError(check, int(steps[FAILED_STEP]), float(clock[T_FAILED]), int(idx), detail)
         return False
 
