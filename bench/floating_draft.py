@@ -6,7 +6,7 @@ kernel's reach of the walls and of the body's box) every 0.02 s, and the mean ov
 periods (between upward crossings of its mean height after 0.5 s): the draft's error; and the free
 decay of its heave from release, fitted with z0 + e^(-zeta omega_n t) (a cos omega_d t + b sin
 omega_d t) (a scan of omega_d and zeta, the rest least squares): against the damped period and
-damping ratio that linear theory's added mass and radiation damping give the 2D box
+damping ratio that linear theory's added mass and radiation damping give the box, 2D or 3D
 (theory/heave.py, data/heave_added_mass/README.md).
 
     python bench/floating_draft.py --dim 3 --shape box --dx 0.01 [--end 2.0] [--set KEY=VALUE ...]
@@ -16,7 +16,8 @@ import time
 
 import numpy as np
 
-TABLE = "box_B0.2_T0.05_h0.3.csv"  # the 2D box's section: 0.2 m beam, 0.05 m draft, 0.3 m of water
+# the box's: its 2D section (0.2 m beam) or the 3D box (0.2 x 0.2 m), 0.05 m draft, 0.3 m of water
+TABLE = {2: "box_B0.2_T0.05_h0.3.csv", 3: "box3d_L0.2_B0.2_T0.05_h0.3.csv"}
 
 
 def main():
@@ -102,9 +103,10 @@ def main():
     fit = free_decay(r[late, 0] - args.release, r[late, 1])
     print(f"; free decay: damped period {fit['period']:.3f} s, damping ratio {fit['damping_ratio']:.3f} (residual "
           f"{fit['rms'] * 1000:.2f} mm); {solver.excluded_particles} excluded; {time.perf_counter() - t0:.0f} s")
-    if dim == 2 and args.shape == "box":
-        theory = heave.natural(density * 0.02, 0.2, heave.table(data_dir("heave_added_mass") / TABLE))
-        print(f"linear theory (data/heave_added_mass): added mass {theory['added_mass']:.2f} kg/m, damped period "
+    if args.shape == "box":
+        area = size ** (dim - 1)  # the waterline's beam (2D) or the waterplane's area (3D)
+        theory = heave.natural(density * 0.1 * area, area, heave.table(data_dir("heave_added_mass") / TABLE[dim]))
+        print(f"linear theory (data/heave_added_mass): added mass {theory['added_mass']:.2f} kg(/m), damped period "
               f"{theory['damped_period']:.3f} s ({100 * (fit['period'] / theory['damped_period'] - 1):+.1f}%), "
               f"damping ratio {theory['damping_ratio']:.3f}", flush=True)
 

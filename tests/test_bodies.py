@@ -257,6 +257,22 @@ def test_a_floating_boxs_heave_decays_at_linear_theorys_period():
     assert solver.excluded_particles == 0
 
 
+@pytest.mark.unit
+def test_linear_heave_of_the_3d_box_solves_its_own_equation():
+    """The 3D box's table (data/heave_added_mass: Capytaine, the whole box's a33 in kg) read as the
+    section's is: the natural frequency solves omega^2 (M + a33(omega)) = rho g A for M = 2 kg and A
+    = 0.04 m^2, and its added mass is about the box's displaced mass (1.04 rho B L T)."""
+    from gpusph_ros.share import data_dir
+    from gpusph_ros.theory import heave as linear
+
+    table = linear.table(data_dir("heave_added_mass") / "box3d_L0.2_B0.2_T0.05_h0.3.csv")
+    theory = linear.natural(2.0, 0.04, table)
+    omega, a33 = theory["omega"], float(np.interp(theory["omega"], table[0], table[1]))
+    assert omega ** 2 * (2.0 + a33) == pytest.approx(1000.0 * 9.81 * 0.04, rel=1e-9)
+    assert theory["added_mass"] == pytest.approx(2.09, abs=0.01) and theory["damped_period"] == pytest.approx(
+        0.643, abs=0.001)
+
+
 def heave(solver, dx: float, end: float = 2.3):
     """A 2D floating body's height and the level far from it (the mean of measure.surface.Gauges
     every spacing 0.06-0.34 m and 0.66-0.94 m from the 1 m tank's left wall, where the kernel, 2h =

@@ -5,6 +5,8 @@ about its draft, oscillates at the natural frequency that solves
 
     omega^2 (M + a33(omega)) = rho g B,
 
+and a 3D body the same with its whole mass, added mass and damping and its waterplane area for B.
+
 decaying with the damping ratio zeta = b33 / (2 (M + a33) omega), at the damped period
 2 pi / (omega sqrt(1 - zeta^2)). a33 and b33 come from a table (data/heave_added_mass/: a boundary
 element solution of the section), interpolated linearly in omega.
@@ -17,17 +19,20 @@ import numpy as np
 
 
 def table(path: Path) -> tuple:
-    """(omega [rad/s], a33 [kg/m], b33 [N s/m^2]) of a data/heave_added_mass CSV."""
+    """(omega [rad/s], a33 [kg/m], b33 [N s/m^2]) of a data/heave_added_mass CSV of a section, or
+    (omega, a33 [kg], b33 [N s/m]) of a 3D body's."""
     with open(path) as f:
-        rows = [(float(r["omega_rad_s"]), float(r["a33_kg_per_m"]), float(r["b33_Ns_per_m2"]))
-                for r in csv.DictReader(f)]
+        reader = csv.DictReader(f)
+        a33, b33 = ("a33_kg", "b33_Ns_per_m") if "a33_kg" in reader.fieldnames else ("a33_kg_per_m", "b33_Ns_per_m2")
+        rows = [(float(r["omega_rad_s"]), float(r[a33]), float(r[b33])) for r in reader]
     return tuple(np.array(c) for c in zip(*rows))
 
 
 def natural(mass: float, beam: float, coefficients: tuple, rho: float = 1000.0, g: float = 9.81) -> dict:
     """The natural frequency [rad/s], added mass, damping ratio and damped period [s] of a section of
-    ``mass`` [kg/m] and waterline ``beam`` [m] with ``coefficients`` (omega, a33, b33), by fixed-point
-    iteration from the frequency without added mass."""
+    ``mass`` [kg/m] and waterline ``beam`` [m] (a 3D body: [kg] and its waterplane area [m^2]) with
+    ``coefficients`` (omega, a33, b33), by fixed-point iteration from the frequency without added
+    mass."""
     omega_t, a33_t, b33_t = coefficients
     omega = math.sqrt(rho * g * beam / mass)
     for _ in range(200):
