@@ -87,6 +87,11 @@ class Run:
                            f"{', '.join(self.wrenches) or 'none'})")
         return self.wrenches[body][1].command(stamp, self.solver.time, force, torque)
 
+    def stamp_time(self, stamp: "float | None") -> float:
+        """A command's stamp [s of the message clock] in simulated time: the run's time origin off
+        (Output.stamps); none or zero, now."""
+        return self.solver.time if not stamp else stamp - self.time_origin_ns * 1.0e-9
+
     def command(self, body: str, kind: str, stamp: float, a, b) -> tuple:
         """A driven body's command (drive.BodyDriver.command: a ``pose`` or a ``twist`` in the
         scene's axes, stamped in simulated time): (taken, what was done or why not)."""

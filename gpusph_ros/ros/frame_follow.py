@@ -86,11 +86,10 @@ class FrameFollower:
 
 def command(run, body: str, result) -> tuple:
     """Body ``body``'s pose command to ``run`` (runner.Run) from a ``FrameFollower.take`` result:
-    (taken, what was done or why not). A stamp in the message clock becomes simulated time (as a
-    cmd_pose's: the run's time origin off; none or zero: now)."""
+    (taken, what was done or why not), stamped as a cmd_pose is (Run.stamp_time)."""
     if isinstance(result, str):
         return False, result
     position, rotation, stamp = result
-    dim, now = run.model.config.dim, run.solver.time
-    stamp = now if not stamp else stamp - run.time_origin_ns * 1.0e-9
-    return run.command(body, "pose", stamp, frames.scene_vector(dim, position), frames.scene_rotation(dim, rotation))
+    dim = run.model.config.dim
+    return run.command(body, "pose", run.stamp_time(stamp), frames.scene_vector(dim, position),
+                       frames.scene_rotation(dim, rotation))

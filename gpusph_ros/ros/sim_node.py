@@ -298,9 +298,8 @@ class SimNode(LifecycleNode):
             run = self.session.run
             if run is None:
                 return
-            dim, now = run.model.config.dim, run.solver.time
-            stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1.0e-9
-            stamp = now if stamp == 0.0 else stamp - run.time_origin_ns * 1.0e-9
+            dim = run.model.config.dim
+            stamp = run.stamp_time(msg.header.stamp.sec + msg.header.stamp.nanosec * 1.0e-9)
             if kind == "wrench":
                 f, m = msg.wrench.force, msg.wrench.torque
                 if msg.header.frame_id not in ("", run.frame_id):

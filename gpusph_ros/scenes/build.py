@@ -129,9 +129,7 @@ def moving_bodies(scene: Scene, cfg: SolverConfig) -> list:
         return []
     for k, o in enumerate(scene.obstacles):
         if isinstance(o.motion, bodies.Motion):
-            corners = np.array(np.meshgrid(*zip(o.lo, o.hi))).reshape(3, -1).T
-            reach = float(np.linalg.norm(corners - np.asarray(o.motion.centre), axis=1).max())
-            speed = o.motion.peak_speed(reach)
+            speed = o.motion.peak_speed(bodies.farthest_corner(o.lo, o.hi, o.motion.centre))
             if speed > cfg.sound_speed / 10.0:
                 raise ConfigError(f"obstacles[{k}].motion", o.name, f"a motion whose particles move at most c0 / 10 = "
                                                                     f"{cfg.sound_speed / 10.0:.3g} m/s; it reaches "

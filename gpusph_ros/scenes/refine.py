@@ -159,6 +159,7 @@ def split(columns: dict, spacing: np.ndarray, zones, tank, dim: int, dx: float, 
     ``stratify(rho, dz)``, if given, is the density a daughter dz above its parent of density rho
     starts with (the hydrostatic profile the lattice was built on), else the parent's. ``limit(n)``,
     if given, is asked before each level is added whether n particles may be (it raises if not)."""
+    solids, moving = solids or {}, moving or {}
     for zone in sorted(zones, key=lambda z: -z.ratio):  # coarse to fine: a fine zone's parents are daughters
         target = zone.ratio * dx
         lo, hi = zone_bounds(zone, tank, dim)
@@ -167,7 +168,7 @@ def split(columns: dict, spacing: np.ndarray, zones, tank, dim: int, dx: float, 
         reach = band_width(target, hdx)
         near = distance_outside(pos, lo, hi, dim) <= reach + spacing  # a daughter lies within spacing / 2
         inside = parent_level & np.all((pos[:, :dim] >= lo) & (pos[:, :dim] <= hi), axis=1)
-        inside |= parent_level & np.isin(columns["body"], _reaching(moving or {}, lo, hi, dim))
+        inside |= parent_level & np.isin(columns["body"], _reaching(moving, lo, hi, dim))
         band = parent_level & near & ~inside
         if not inside.any():
             continue
@@ -176,9 +177,9 @@ def split(columns: dict, spacing: np.ndarray, zones, tank, dim: int, dx: float, 
         keep = distance_outside(ring["pos"], lo, hi, dim) <= reach
         if layers is not None:
             thickness = layers * target
-            made = _shallow(new, thickness, tank, solids or {}, dim)
+            made = _shallow(new, thickness, tank, solids, dim)
             new, new_spacing = {name: values[made] for name, values in new.items()}, new_spacing[made]
-            keep &= _shallow(ring, thickness, tank, solids or {}, dim)
+            keep &= _shallow(ring, thickness, tank, solids, dim)
         ring = {name: values[keep] for name, values in ring.items()}
         ring["ptype"] = np.where(ring["ptype"] == FLUID, PASSIVE, ring["ptype"]).astype(np.int32)
         if limit is not None:

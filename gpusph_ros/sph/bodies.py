@@ -147,9 +147,15 @@ class Motion:
             return None
         shift, angle = reach
         lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
-        corners = np.array(np.meshgrid(*zip(lo, hi))).reshape(3, -1).T
-        turn = min(angle, 2.0) * float(np.linalg.norm(corners - np.asarray(self.centre), axis=1).max())
+        turn = min(angle, 2.0) * farthest_corner(lo, hi, self.centre)
         return lo + np.array([s[0] for s in shift]) - turn, hi + np.array([s[1] for s in shift]) + turn
+
+
+def farthest_corner(lo, hi, centre) -> float:
+    """How far the farthest corner of the box [lo, hi] (3-vectors) stands from ``centre`` [m]: the
+    arm of a body's particle farthest from its centre of rotation."""
+    corners = np.array(np.meshgrid(*zip(lo, hi))).reshape(3, -1).T
+    return float(np.linalg.norm(corners - np.asarray(centre), axis=1).max())
 
 
 @dataclass(frozen=True)

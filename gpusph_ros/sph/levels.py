@@ -128,6 +128,11 @@ def build(scalar):
         return scalar(2.0) * h + scalar(0.5) * h * p.dx * p.inv_h
 
     @wp.func
+    def edge(p: Params, h: scalar) -> scalar:
+        """``edge_margin`` on the device, for a zone of smoothing length h."""
+        return band(p, h) + scalar(4.0) * h
+
+    @wp.func
     def place(p: Params, x: vec, h_i: scalar, zone_lo: wp.array(dtype=vec), zone_hi: wp.array(dtype=vec),
               zone_h: wp.array(dtype=scalar)):
         """Where a particle of smoothing length h_i at x stands among the zones: (1 inside a finer zone,
@@ -261,14 +266,12 @@ def build(scalar):
             return
         x = pos[i]
         for k in range(p.n_zones):
-            h_k = zone_h[k]
-            margin = band(p, h_k) + scalar(4.0) * h_k
             d = box_distance(p, x, zone_lo[k], zone_hi[k])
             if d <= scalar(0.0):
                 d = scalar(FAR)
                 for ax in range(p.dim):
                     d = wp.min(d, wp.min(x[ax] - zone_lo[k][ax], zone_hi[k][ax] - x[ax]))
-            if d < margin:
+            if d < edge(p, zone_h[k]):
                 wp.atomic_min(fail, fail_slot, ids[i])
 
     @wp.kernel(enable_backward=False, module="unique")

@@ -547,9 +547,9 @@ class Solver:
         self.steps = int(steps[STEP])
         self._excluded_host = (self._excluded.numpy(), self._excluded_mass.numpy())
         self._census_host = self._energy_sum.numpy()
-        if fail[health.NEIGHBOUR_OVERFLOW] != health.NO_FAILURE and self._measured_width \
-                and self.neighbours.longest() <= self._widest:
-            self.resize_lists(min(measured_width(self.neighbours.longest()), self._widest))
+        longest = self.neighbours.longest() if fail[health.NEIGHBOUR_OVERFLOW] != health.NO_FAILURE else 0
+        if longest and self._measured_width and longest <= self._widest:
+            self.resize_lists(min(measured_width(longest), self._widest))
             self.clear_failure()
             return True
         for check, idx in zip(health.CHECKS, fail):
@@ -582,7 +582,7 @@ class Solver:
             if check == "neighbour_overflow":
                 limit = (f"the lattice's estimate, {self._widest}, which the lists are widened to at most"
                          if self._measured_width else f"the lists' fixed {self.neighbours.max_neighbours}")
-                raise NeighbourOverflow(f"a particle has {self.neighbours.longest()} neighbours at step "
+                raise NeighbourOverflow(f"a particle has {longest} neighbours at step "
                                         f"{int(steps[FAILED_STEP])}, more than {limit}: particles have clumped, "
                                         f"or give max_neighbours")
             raise HealthError(check, int(steps[FAILED_STEP]), float(clock[T_FAILED]), int(idx), detail)
