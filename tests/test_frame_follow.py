@@ -80,7 +80,7 @@ def test_a_body_follows_its_frame_as_a_robot_moves_it():
     """The paddle's frame, ``robot/paddle``, on a 1 Hz, 2 cm sinusoid along x under a static
     ``robot`` frame 0.12 m along the world's x, a transform at each output (0.05 s of simulated
     time), stamped then: at the next output the paddle stands within 4 mm of where the frame was
-    (the driver walks to the newest pose within its limits; measured 3.1 mm at most, 1.2 mm RMS), and
+    (the driver walks to the newest pose within its limits), and
     the fluid's force comes back each output, over the period the hydrostatic load rho g h^2 / 2 =
     441 N/m on the paddle within 10%."""
     from gpusph_ros.runner import Run
