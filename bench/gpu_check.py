@@ -6,11 +6,13 @@ limits add up to 9 min 40 s).
 2. bench/step_counts.py on cuda:0: launches, sorts, fills, copies and host reads of each kind of
    step, the host's syncs per output, and the step loop eager against replayed from its captured
    graph (sph/graph.py), at about 10^5 particles;
-3. bench/solver.py on cuda:0 at about 10^5, 10^6, 4x10^6 and 10^7 particles of DamBreak 1, float32
+3. bench/repeat.py on cuda:0: the same run twice, bit for bit (DamBreak 1 with dynamic and Adami
+   walls, in its zone under multirate, and with a floating box; 2 cm, 0.1 s), digests compared;
+4. bench/solver.py on cuda:0 at about 10^5, 10^6, 4x10^6 and 10^7 particles of DamBreak 1, float32
    and float64 (MIPPS, neighbours, steps/s); a size the GPU's memory cannot hold is refused by the
    build, named in the output, and the others go on;
-4. bench/node.py's cloud cost per output at about 10^6 particles on the GPU;
-5. DamBreak 1 of the experiment (dambreak1_lab, 0.30 m column) at dx = 1 cm to t = 1 s with
+5. bench/node.py's cloud cost per output at about 10^6 particles on the GPU;
+6. DamBreak 1 of the experiment (dambreak1_lab, 0.30 m column) at dx = 1 cm to t = 1 s with
    gpusph-run, its real-time factor (wall time over simulated time, start-up included), and
    gpusph-analyze's table of it against Yeh & Petroff.
 
@@ -26,6 +28,7 @@ that it takes under 3 minutes: the script itself checked where no GPU is.
 import argparse
 import datetime
 import os
+import shutil
 import subprocess
 import sys
 import time
@@ -50,10 +53,13 @@ def steps(device: str, out: Path) -> list:
         ("what a step asks of the device; eager against replayed",
          [py, str(BENCH / "step_counts.py"), "--device", device, "--dx", "0.03" if cpu else "0.015",
           "--span", "0.02" if cpu else "0.1"], 60),
+        ("the same run twice, bit for bit",
+         [py, str(BENCH / "repeat.py"), "--device", device, "--dx", "0.05" if cpu else "0.02",
+          "--end", "0.02" if cpu else "0.1"], 60),
         ("solver throughput, DamBreak 1",
          [py, str(BENCH / "solver.py"), "--device", device, "--particles",
           *(["1e4", "3e4"] if cpu else ["1e5", "1e6", "4e6", "1e7"]), "--seconds", "2" if cpu else "3"],
-         45 if cpu else 210),
+         45 if cpu else 150),
         ("cloud cost per output",
          [py, str(BENCH / "node.py"), "cloud", "--device", device, "--particles", "1e4" if cpu else "1e6"], 40),
         (f"DamBreak 1 (0.30 m column) at {float(dx) * 100:g} cm: run",
@@ -104,6 +110,8 @@ def main() -> int:
     failed = []
     start = time.perf_counter()
     for title, command, limit in steps(device, out):
+        if "--out" in command:  # the run's recording of an earlier check: gpusph-run refuses to write over it
+            shutil.rmtree(command[command.index("--out") + 1], ignore_errors=True)
         print(f"gpu-check: {title} (limit {limit} s) ...", flush=True)
         ok, wall, text = run_step(title, command, limit, env)
         print(f"gpu-check: {title}: {'ok' if ok else 'FAILED'} in {wall:.0f} s", flush=True)

@@ -14,7 +14,7 @@ from gpusph_ros.scenes.build import build
 from gpusph_ros.scenes.schema import load_scene
 from gpusph_ros.study import charts, table
 from gpusph_ros.study.schema import load_study
-from gpusph_ros.study.sweep import sweep
+from gpusph_ros.study.sweep import sweep, worker_device
 
 pytestmark = pytest.mark.study
 
@@ -92,3 +92,13 @@ def test_a_worker_killed_mid_study_leaves_every_case_done_or_reported(cluster, t
         sweep(study, client=client, progress=lines.append)
     finished = sum(r["status"] == "completed" for r in rows)
     assert f"{finished} already finished" in lines[0]
+
+
+def test_each_local_worker_owns_one_gpu(cluster):
+    # a study on cuda runs on one worker per GPU, each on its own: worker j takes cuda:j whatever
+    # case it is given (cases were given cuda:(index mod GPUs) before, so two could share a GPU)
+    with Client(cluster) as client:
+        workers = sorted(client.scheduler_info()["workers"])
+        owned = {w: {client.submit(worker_device, 2, workers=[w], pure=False).result() for _ in range(3)}
+                 for w in workers}
+    assert sorted(d for devices in owned.values() for d in devices) == ["cuda:0", "cuda:1"]

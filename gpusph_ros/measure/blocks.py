@@ -12,6 +12,7 @@ import functools
 import numpy as np
 import warp as wp
 
+from ..sph import sums
 from ..sph.state import FLUID
 
 ACROSS = 3.0  # block size across the face, in dx
@@ -25,21 +26,30 @@ def build(scalar):
     @wp.kernel(enable_backward=False, module="unique")
     def bin_pressure(lo: wp.array(dtype=vec), hi: wp.array(dtype=vec), bound_lo: vec, bound_hi: vec,
                      pos: wp.array(dtype=vec), pressure: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
-                     sums: wp.array(dtype=scalar), counts: wp.array(dtype=wp.int32)):
-        i = wp.tid()
-        x = pos[i]
-        if ptype[i] != FLUID:
-            return
-        # most particles are nowhere near a block
-        for ax in range(3):
-            if x[ax] < bound_lo[ax] or x[ax] >= bound_hi[ax]:
-                return
+                     counts: wp.array(dtype=wp.int32), part: wp.array2d(dtype=scalar), lead: int, step: int):
+        """Block k's pressure sum of each pressure block into part[k] (sums.py: a fixed order of the
+        terms) and the fluid particles in each into counts (integers: the same in any order)."""
+        k = wp.tid()
+        n = ptype.shape[0]
         for b in range(lo.shape[0]):
-            a = lo[b]
-            c = hi[b]
-            if x[0] >= a[0] and x[0] < c[0] and x[1] >= a[1] and x[1] < c[1] and x[2] >= a[2] and x[2] < c[2]:
-                wp.atomic_add(sums, b, pressure[i])
-                wp.atomic_add(counts, b, 1)
+            part[k, b] = scalar(0.0)
+        for j in range(sums.SPAN):
+            i = sums.member(k, j, lead, step)
+            if i < n:
+                x = pos[i]
+                near = ptype[i] == FLUID
+                # most particles are nowhere near a block
+                for ax in range(3):
+                    if x[ax] < bound_lo[ax] or x[ax] >= bound_hi[ax]:
+                        near = False
+                if near:
+                    for b in range(lo.shape[0]):
+                        a = lo[b]
+                        c = hi[b]
+                        if (x[0] >= a[0] and x[0] < c[0] and x[1] >= a[1] and x[1] < c[1] and x[2] >= a[2]
+                                and x[2] < c[2]):
+                            part[k, b] = part[k, b] + pressure[i]
+                            wp.atomic_add(counts, b, 1)
 
     return bin_pressure
 
@@ -93,16 +103,18 @@ class PressureBlockForce:
         self._bound_lo = solver.vec(*lo.min(axis=0))
         self._bound_hi = solver.vec(*hi.max(axis=0))
         self._sums = wp.zeros(len(lo), dtype=solver.scalar, device=dev)
+        self._part = sums.Partials(solver.n, len(lo), solver.scalar, dev)
         self._counts = wp.zeros(len(lo), dtype=wp.int32, device=dev)
 
     def sample(self) -> dict:
         """{offset: (force_x, upstream, downstream)} [N, or N/m in 2D]; an empty block adds nothing."""
         params, fields, _ = self.solver.measurement_view()
         s = self.solver
-        self._sums.zero_()
         self._counts.zero_()
-        wp.launch(self._bin, dim=s.n, inputs=[self._lo, self._hi, self._bound_lo, self._bound_hi, s.pos,
-                                              fields.pressure, s.ptype, self._sums, self._counts], device=s.device)
+        wp.launch(self._bin, dim=self._part.count, inputs=[self._lo, self._hi, self._bound_lo, self._bound_hi, s.pos,
+                                                           fields.pressure, s.ptype, self._counts, *self._part.args()],
+                  device=s.device)
+        self._part.total(self._sums)
         counts = self._counts.numpy()
         mean = np.where(counts > 0, self._sums.numpy().astype(np.float64) / np.maximum(counts, 1), 0.0)
         load = mean * self.area

@@ -6,6 +6,7 @@ import functools
 import numpy as np
 import warp as wp
 
+from ..sph import sums
 from ..sph.state import FLUID
 
 
@@ -16,16 +17,23 @@ def build(scalar):
     @wp.kernel(enable_backward=False, module="unique")
     def column_sums(up: int, centres: wp.array(dtype=vec), radius2: wp.array(dtype=scalar),
                     pos: wp.array(dtype=vec), vel: wp.array(dtype=vec), ptype: wp.array(dtype=wp.int32),
-                    sums: wp.array(dtype=vec), counts: wp.array(dtype=wp.int32)):
-        i = wp.tid()
-        if ptype[i] != FLUID:
-            return
-        for k in range(centres.shape[0]):
-            d = pos[i] - centres[k]
-            d[up] = scalar(0.0)
-            if wp.dot(d, d) <= radius2[k]:
-                wp.atomic_add(sums, k, vel[i])
-                wp.atomic_add(counts, k, 1)
+                    counts: wp.array(dtype=wp.int32), part: wp.array2d(dtype=vec), lead: int, step: int):
+        """Block k's velocity sum of each column into part[k] (sums.py: a fixed order of the terms)
+        and the fluid particles in each into counts (integers: the same in any order)."""
+        k = wp.tid()
+        n = ptype.shape[0]
+        for c in range(centres.shape[0]):
+            part[k, c] = vec(scalar(0.0))
+        for j in range(sums.SPAN):
+            i = sums.member(k, j, lead, step)
+            if i < n:
+                if ptype[i] == FLUID:
+                    for c in range(centres.shape[0]):
+                        d = pos[i] - centres[c]
+                        d[up] = scalar(0.0)
+                        if wp.dot(d, d) <= radius2[c]:
+                            part[k, c] = part[k, c] + vel[i]
+                            wp.atomic_add(counts, c, 1)
 
     return column_sums
 
@@ -42,16 +50,18 @@ class ColumnMeans:
         self.radius2 = wp.array(np.asarray(radii, dtype=np.float64) ** 2, dtype=solver.scalar, device=dev)
         k = self.centres.shape[0]
         self._sums = wp.zeros(k, dtype=solver.vec, device=dev)
+        self._part = sums.Partials(solver.n, k, solver.vec, dev)
         self._counts = wp.zeros(k, dtype=wp.int32, device=dev)
 
     def sample(self) -> dict:
         """vel (k x 3, zero where a column holds no fluid) and count (fluid particles in each)."""
         s = self.solver
-        self._sums.zero_()
         self._counts.zero_()
         # one launch: CPU atomics are not atomic across the threads of a split launch
-        wp.launch(self._sums_kernel, dim=s.n, inputs=[s.config.dim - 1, self.centres, self.radius2, s.pos, s.vel,
-                                                      s.ptype, self._sums, self._counts], device=s.device)
+        wp.launch(self._sums_kernel, dim=self._part.count,
+                  inputs=[s.config.dim - 1, self.centres, self.radius2, s.pos, s.vel, s.ptype, self._counts,
+                          *self._part.args()], device=s.device)
+        self._part.total(self._sums)
         sums = self._sums.numpy().astype(np.float64)
         counts = self._counts.numpy()
         vel = np.where(counts[:, None] > 0, sums / np.maximum(counts, 1)[:, None], 0.0)

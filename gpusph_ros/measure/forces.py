@@ -15,12 +15,11 @@ sample with no step since the last one repeats it; before any step, it is the la
 evaluation's.
 """
 import functools
-from types import SimpleNamespace
 
 import numpy as np
 import warp as wp
 
-from ..sph import health
+from ..sph import health, sums
 from ..sph.state import DT
 
 
@@ -30,33 +29,39 @@ def build(scalar):
     healthy = health.build(scalar).healthy
 
     @wp.kernel(enable_backward=False, module="unique")
-    def sum_wrench(body_id: int, centre: vec, body: wp.array(dtype=wp.int32), pos: wp.array(dtype=vec),
-                   mass: wp.array(dtype=scalar), acc: wp.array(dtype=vec), out: wp.array(dtype=vec)):
-        i = wp.tid()
-        if body[i] == body_id:
-            f = mass[i] * acc[i]
-            wp.atomic_add(out, 0, f)
-            wp.atomic_add(out, 1, wp.cross(pos[i] - centre, f))
+    def wrench_part(body_id: int, centre: vec, body: wp.array(dtype=wp.int32), pos: wp.array(dtype=vec),
+                    mass: wp.array(dtype=scalar), acc: wp.array(dtype=vec), timed: int, stride: int,
+                    fail: wp.array(dtype=wp.int32), clock: wp.array(dtype=wp.float64), span: wp.array(dtype=wp.float64),
+                    part: wp.array2d(dtype=vec), lead: int, step: int, chunk: int, launch_stride: int):
+        """Block k's share (sums.py) of the force and torque on the body (part[k, 0], part[k, 1]);
+        ``timed``: of the step's impulse and angular impulse, its length added to span by block 0
+        (a failed step adds nothing: its state is not kept)."""
+        k = wp.tid() * launch_stride + chunk
+        n = body.shape[0]
+        weight = scalar(1.0)
+        zero = vec(scalar(0.0))
+        part[k, 0] = zero
+        part[k, 1] = zero
+        if timed != 0:
+            if not healthy(fail) or clock[DT] <= wp.float64(0.0):
+                return
+            dt = wp.float64(stride) * clock[DT]
+            weight = scalar(dt)
+            if k == 0:
+                span[0] = span[0] + dt
+        force = zero
+        torque = zero
+        for j in range(sums.SPAN):
+            i = sums.member(k, j, lead, step)
+            if i < n:
+                if body[i] == body_id:
+                    f = mass[i] * acc[i] * weight
+                    force = force + f
+                    torque = torque + wp.cross(pos[i] - centre, f)
+        part[k, 0] = force
+        part[k, 1] = torque
 
-    @wp.kernel(enable_backward=False, module="unique")
-    def add_wrench(body_id: int, centre: vec, body: wp.array(dtype=wp.int32), pos: wp.array(dtype=vec),
-                   mass: wp.array(dtype=scalar), acc: wp.array(dtype=vec), stride: int,
-                   fail: wp.array(dtype=wp.int32), clock: wp.array(dtype=wp.float64), out: wp.array(dtype=vec),
-                   span: wp.array(dtype=wp.float64)):
-        """The step's impulse and angular impulse into out, its length into span (a failed step
-        adds nothing: its state is not kept)."""
-        i = wp.tid()
-        if not healthy(fail) or clock[DT] <= wp.float64(0.0):
-            return
-        dt = wp.float64(stride) * clock[DT]
-        if i == 0:
-            span[0] = span[0] + dt
-        if body[i] == body_id:
-            f = mass[i] * acc[i] * scalar(dt)
-            wp.atomic_add(out, 0, f)
-            wp.atomic_add(out, 1, wp.cross(pos[i] - centre, f))
-
-    return SimpleNamespace(sum_wrench=sum_wrench, add_wrench=add_wrench)
+    return wrench_part
 
 
 class BodyWrench:
@@ -67,19 +72,23 @@ class BodyWrench:
         self.solver = solver
         self.body_id = int(body_id)
         self.centre = solver.vec(*[float(c) for c in centre])
-        self._passes = build(solver.scalar)
+        self._kernel = build(solver.scalar)
+        self._part = sums.Partials(solver.n, 2, solver.vec, solver.device)
         self._out = wp.zeros(2, dtype=solver.vec, device=solver.device)
         self._impulse = wp.zeros(2, dtype=solver.vec, device=solver.device)
         self._span = wp.zeros(1, dtype=wp.float64, device=solver.device)
         self._last = None
         solver.each_step(self._add)
 
-    def _add(self):
+    def _sum(self, timed: bool, out):
         s = self.solver
-        # one launch: CPU atomics are not atomic across the threads of a split launch
-        wp.launch(self._passes.add_wrench, dim=s.n,
-                  inputs=[self.body_id, self.centre, s.body, s.pos, s.mass, s.acc, s.params.coarse_stride,
-                          s.failures, s.clock, self._impulse, self._span], device=s.device)
+        s.launch(self._kernel, self._part.count,
+                 [self.body_id, self.centre, s.body, s.pos, s.mass, s.acc, int(timed), s.params.coarse_stride,
+                  s.failures, s.clock, self._span, *self._part.args()])
+        self._part.total(out, add=timed)
+
+    def _add(self):
+        self._sum(True, self._impulse)
 
     def restart(self):
         """Forget the steps so far: the next sample averages only the steps after this."""
@@ -96,9 +105,6 @@ class BodyWrench:
             self._last = (out[0], out[1])
         if self._last is not None:
             return self._last
-        s = self.solver
-        self._out.zero_()
-        wp.launch(self._passes.sum_wrench, dim=s.n,
-                  inputs=[self.body_id, self.centre, s.body, s.pos, s.mass, s.acc, self._out], device=s.device)
+        self._sum(False, self._out)
         out = self._out.numpy().astype(np.float64)
         return out[0], out[1]

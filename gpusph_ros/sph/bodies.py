@@ -73,7 +73,7 @@ from types import SimpleNamespace
 import numpy as np
 import warp as wp
 
-from . import health
+from . import health, sums
 from .state import BOUNDARY, DT, T
 
 FIXED, SINUSOID, MOVE, FLOATING, DRIVEN, TRANSLATE, SERIES = 0, 1, 2, 3, 4, 5, 6
@@ -635,12 +635,12 @@ def build(scalar):
                    clock: wp.array(dtype=wp.float64), factor: wp.float64, gravity: wp.vec3d, wall_lo: wp.vec3d,
                    wall_hi: wp.vec3d, solid_lo: wp.array(dtype=wp.vec3d),
                    solid_hi: wp.array(dtype=wp.vec3d), n_solids: int, base: wp.array(dtype=Rigid),
-                   rates_at: wp.array(dtype=Rigid), sums: wp.array2d(dtype=wp.vec3d), out: wp.array(dtype=Rigid),
+                   rates_at: wp.array(dtype=Rigid), sums: wp.array(dtype=wp.vec3d), out: wp.array(dtype=Rigid),
                    poses: wp.array(dtype=Pose)):
         """Each body's pose at t + factor dt: a prescribed body's from its law (a series' from its
         rows of ``series``, series_table); a floating body's state advanced from ``base`` by factor
         dt with the velocities of ``rates_at`` and the last force evaluation's force and torque
-        (sums[b, 0], sums[b, 1]) into ``out`` (factor 0: base itself), its acceleration from those."""
+        (sums[2 b], sums[2 b + 1]) into ``out`` (factor 0: base itself), its acceleration from those."""
         b = wp.tid()
         law = laws[b]
         t = clock[T] + factor * clock[DT]
@@ -656,8 +656,8 @@ def build(scalar):
         if law.kind != FLOATING:
             return
         body = base[b]
-        force = wp.cw_mul(sums[b, 0] + gravity * law.mass + law.ext_force, law.translate)
-        torque = wp.cw_mul(sums[b, 1] + law.ext_torque, law.rotate)
+        force = wp.cw_mul(sums[2 * b] + gravity * law.mass + law.ext_force, law.translate)
+        torque = wp.cw_mul(sums[2 * b + 1] + law.ext_torque, law.rotate)
         if t <= law.release:  # held until released: it stands where it is, at rest
             force = wp.vec3d(wp.float64(0.0), wp.float64(0.0), wp.float64(0.0))
             torque = force
@@ -718,22 +718,27 @@ def build(scalar):
     @wp.kernel(enable_backward=False, module="unique")
     def wrench_sums(laws: wp.array(dtype=Law), poses: wp.array(dtype=Pose), ptype: wp.array(dtype=wp.int32),
                     body: wp.array(dtype=wp.int32), pos: wp.array(dtype=vec), mass: wp.array(dtype=scalar),
-                    acc: wp.array(dtype=vec), sums: wp.array2d(dtype=wp.vec3d)):
+                    acc: wp.array(dtype=vec), part: wp.array2d(dtype=wp.vec3d), lead: int, step: int, chunk: int,
+                    stride: int):
         """Each floating body's force and torque about its centre of mass from the fluid: sum m_i
-        acc_i and sum rho_i x m_i acc_i over its particles (the force pass's reactions). One launch:
-        CPU atomics are not atomic across the threads of a split launch."""
-        i = wp.tid()
-        b = body[i]
-        if b < 0 or ptype[i] != BOUNDARY:
-            return
-        if laws[b].kind != FLOATING:
-            return
-        a = acc[i]
-        f = wp.vec3d(wp.float64(a[0]), wp.float64(a[1]), wp.float64(a[2])) * wp.float64(mass[i])
-        x = pos[i]
-        arm = wp.vec3d(wp.float64(x[0]), wp.float64(x[1]), wp.float64(x[2])) - poses[b].x
-        wp.atomic_add(sums, b, 0, f)
-        wp.atomic_add(sums, b, 1, wp.cross(arm, f))
+        acc_i and sum rho_i x m_i acc_i over its particles (the force pass's reactions), block k's
+        share into part[k, 2 b] and part[k, 2 b + 1] (sums.py: a fixed order of the terms)."""
+        k = wp.tid() * stride + chunk
+        n = ptype.shape[0]
+        for s in range(part.shape[1]):
+            part[k, s] = wp.vec3d(wp.float64(0.0))
+        for j in range(sums.SPAN):
+            i = sums.member(k, j, lead, step)
+            if i < n:
+                b = body[i]
+                if b >= 0 and ptype[i] == BOUNDARY:
+                    if laws[b].kind == FLOATING:
+                        a = acc[i]
+                        f = wp.vec3d(wp.float64(a[0]), wp.float64(a[1]), wp.float64(a[2])) * wp.float64(mass[i])
+                        x = pos[i]
+                        arm = wp.vec3d(wp.float64(x[0]), wp.float64(x[1]), wp.float64(x[2])) - poses[b].x
+                        part[k, 2 * b] = part[k, 2 * b] + f
+                        part[k, 2 * b + 1] = part[k, 2 * b + 1] + wp.cross(arm, f)
 
     @wp.kernel(enable_backward=False, module="unique")
     def commit_rigid(fail: wp.array(dtype=wp.int32), candidate: wp.array(dtype=Rigid), state: wp.array(dtype=Rigid)):
@@ -745,16 +750,21 @@ def build(scalar):
     @wp.kernel(enable_backward=False, module="unique")
     def work_on_fluid(laws: wp.array(dtype=Law), clock: wp.array(dtype=wp.float64), stride: int,
                       ptype: wp.array(dtype=wp.int32), body: wp.array(dtype=wp.int32), mass: wp.array(dtype=scalar),
-                      acc: wp.array(dtype=vec), vel: wp.array(dtype=vec), total: wp.array(dtype=wp.float64),
-                      slot: int):
-        """total[slot] += the work of one step (``stride`` steps dt: multirate's coarse step) of the
-        moving bodies on the fluid: stride dt sum_w -m_w a_w . v_w over their particles, a_w the
-        fluid's force on w over m_w and v_w their velocity at the step's midpoint (the corrector's
-        rates): the energy the fluid may gain (health.census_check)."""
-        i = wp.tid()
-        if not moving(laws, ptype, body, i):
-            return
-        wp.atomic_add(total, slot, -wp.float64(stride) * clock[DT] * wp.float64(mass[i] * wp.dot(acc[i], vel[i])))
+                      acc: wp.array(dtype=vec), vel: wp.array(dtype=vec), part: wp.array2d(dtype=wp.float64),
+                      lead: int, step: int, chunk: int, launch_stride: int):
+        """Block k's share (part[k, 0], sums.py) of the work of one step (``stride`` steps dt:
+        multirate's coarse step) of the moving bodies on the fluid: stride dt sum_w -m_w a_w . v_w
+        over their particles, a_w the fluid's force on w over m_w and v_w their velocity at the
+        step's midpoint (the corrector's rates): the energy the fluid may gain (health.census_check)."""
+        k = wp.tid() * launch_stride + chunk
+        n = ptype.shape[0]
+        work = wp.float64(0.0)
+        for j in range(sums.SPAN):
+            i = sums.member(k, j, lead, step)
+            if i < n:
+                if moving(laws, ptype, body, i):
+                    work = work - wp.float64(mass[i] * wp.dot(acc[i], vel[i]))
+        part[k, 0] = wp.float64(stride) * clock[DT] * work
 
     def law_list(motions: list) -> list:
         """The Law of each of ``motions`` by body id (None: fixed), at least one."""

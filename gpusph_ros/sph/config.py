@@ -70,6 +70,11 @@ def check_device(device):
     names = [d.alias for d in wp.get_devices()]
     if device not in names:
         raise ConfigError("device", device, "a Warp device of this machine: " + ", ".join(names))
+    found = wp.get_device(device)
+    if found.is_cuda and found.arch < 60:
+        # the atomic minima and maxima of float64 (health.census) need sm_60's native float64 atomics
+        raise ConfigError("device", device, f"a CUDA device of compute capability 6.0 or later, got "
+                                            f"{found.arch // 10}.{found.arch % 10}")
 
 
 @dataclass

@@ -52,7 +52,7 @@ from types import SimpleNamespace
 
 import warp as wp
 
-from . import eos, kernels, state
+from . import eos, kernels, state, sums
 
 FLUID = state.FLUID
 BOUNDARY = state.BOUNDARY
@@ -81,6 +81,10 @@ CENSUS_START = (0.0, NO_ENERGY, 0.0, 0.0, 1.0e300, -1.0e300, 0.0)  # before any 
 CLUMPED, FIRST_CLUMPED = range(2)
 # slots of the excluded mass: the fluid mass excluded, the time of the first exclusion (-1 before)
 MASS, FIRST_TIME = range(2)
+# the excluded mass of a step is summed as an integer, in units of 2^-MASS_BITS of the fluid mass, so
+# that it is the same whatever order the particles are added in (a float atomic sum is not, on a
+# GPU): a particle's mass is rounded by at most 4e-16 of the fluid's, and the whole fluid fits an int64
+MASS_BITS = 50
 T, DT = state.T, state.DT
 
 
@@ -100,7 +104,7 @@ def params(cfg, fluid_mass: float, n_fluid: int) -> dict:
     """The Params fields of the checks under ``cfg`` (a SolverConfig) for a fluid of ``fluid_mass``
     in ``n_fluid`` particles: the density bounds, the tank's inside and the solids, the penetration
     depth, clumping's distances and share, the energy slack (energy_growth_ratio M g H), the
-    displacement limit (0.9 x 2h, squared) and the exclusion limit."""
+    displacement limit (0.9 x 2h, squared), the exclusion limit and the excluded mass's units."""
     return {"rho_min": cfg.rho_min_ratio * cfg.rho0, "rho_max": cfg.rho_max_ratio * cfg.rho0,
             "wall_lo": cfg.wall_lo, "wall_hi": cfg.wall_hi, "wall_top": cfg.wall_top,
             "penetration": cfg.penetration_ratio * cfg.dx,
@@ -109,7 +113,8 @@ def params(cfg, fluid_mass: float, n_fluid: int) -> dict:
             "clump_fraction": cfg.clump_fraction, "n_fluid": max(1, n_fluid),
             "energy_slack": cfg.energy_growth_ratio * fluid_mass * cfg.g_norm * cfg.depth,
             "move_limit2": (0.9 * 2.0 * cfg.h) ** 2, "exclude": 1 if cfg.max_excluded_fraction > 0.0 else 0,
-            "excluded_limit": cfg.max_excluded_fraction * fluid_mass}
+            "excluded_limit": cfg.max_excluded_fraction * fluid_mass,
+            "mass_units": 2.0 ** MASS_BITS / fluid_mass if fluid_mass > 0.0 else 1.0}
 
 
 @functools.lru_cache(maxsize=None)
@@ -186,10 +191,10 @@ def build(scalar):
                         ptype: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32),
                         solid_lo: wp.array(dtype=vec), solid_hi: wp.array(dtype=vec),
                         fail: wp.array(dtype=wp.int32), faulty: wp.array(dtype=wp.int32),
-                        pending: wp.array(dtype=wp.int32), pending_mass: wp.array(dtype=wp.float64)):
+                        pending: wp.array(dtype=wp.int32), pending_mass: wp.array(dtype=wp.int64)):
         """Checks each particle of the candidate state (pos_c, vel_c, rho_c). A fluid particle at
         fault, when exclusion is on, is marked in ``faulty`` for commit to exclude and counted in
-        ``pending`` (by reason) and ``pending_mass``; any other fault flags its slot in ``fail``
+        ``pending`` (by reason) and ``pending_mass`` (in p.mass_units); any other fault flags its slot in ``fail``
         with the caller's particle id (the slots are re-sorted by later steps of the batch)."""
         i = wp.tid()
         t = ptype[i]
@@ -201,28 +206,29 @@ def build(scalar):
         if t == FLUID and p.exclude != 0:
             faulty[i] = 1
             wp.atomic_add(pending, reason, 1)
-            wp.atomic_add(pending_mass, 0, wp.float64(mass[i]))
+            wp.atomic_add(pending_mass, 0, wp.int64(wp.round(wp.float64(mass[i]) * p.mass_units)))
         else:
             wp.atomic_min(fail, reason, ids[i])
 
     @wp.kernel(enable_backward=False, module="unique")
     def exclusion_check(p: Params, clock: wp.array(dtype=wp.float64), pending: wp.array(dtype=wp.int32),
-                        pending_mass: wp.array(dtype=wp.float64), excluded: wp.array(dtype=wp.int32),
+                        pending_mass: wp.array(dtype=wp.int64), excluded: wp.array(dtype=wp.int32),
                         excluded_mass: wp.array(dtype=wp.float64), fail: wp.array(dtype=wp.int32)):
         """After every other check of the candidate: flags excluded_fraction when the excluded
         fluid would pass the limit; else, if the candidate is to be committed, adds this step's
         exclusions to the run's (excluded_mass = [mass, time of the first exclusion or -1]).
         A failed step's exclusions stay pending for the report."""
-        if pending_mass[0] <= wp.float64(0.0):
+        if pending_mass[0] <= wp.int64(0):
             return
-        if excluded_mass[MASS] + pending_mass[0] > p.excluded_limit:
+        pending_kg = wp.float64(pending_mass[0]) / p.mass_units
+        if excluded_mass[MASS] + pending_kg > p.excluded_limit:
             fail[EXCLUDED_FRACTION] = 0
         if not healthy(fail):
             return
         if excluded_mass[FIRST_TIME] < wp.float64(0.0):
             excluded_mass[FIRST_TIME] = clock[T] + wp.float64(p.coarse_stride) * clock[DT]  # the step's end
-        excluded_mass[MASS] = excluded_mass[MASS] + pending_mass[0]
-        pending_mass[0] = wp.float64(0.0)
+        excluded_mass[MASS] = excluded_mass[MASS] + pending_kg
+        pending_mass[0] = wp.int64(0)
         for k in range(N_REASONS):
             excluded[k] = excluded[k] + pending[k]
             pending[k] = 0
@@ -237,24 +243,43 @@ def build(scalar):
     def census(p: Params, pos: wp.array(dtype=vec), vel: wp.array(dtype=vec), rho: wp.array(dtype=scalar),
                mass: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32),
                clumped: wp.array(dtype=wp.int32), faulty: wp.array(dtype=wp.int32), solid_lo: wp.array(dtype=vec),
-               solid_hi: wp.array(dtype=vec), total: wp.array(dtype=wp.float64), count: wp.array(dtype=wp.int32)):
-        """total[ENERGY] += the fluid's kinetic + potential + elastic energy; total[RHO_LOW],
-        total[RHO_HIGH] hold the lowest and highest density of a fluid particle not at fault seen in
-        any census; count[CLUMPED] counts the clumped fluid particles away from walls and
-        count[FIRST_CLUMPED] holds the first of them (one launch: atomics)."""
-        i = wp.tid()
-        if ptype[i] != FLUID:
-            return
-        if faulty[i] == 0:
-            wp.atomic_min(total, RHO_LOW, wp.float64(rho[i]))
-            wp.atomic_max(total, RHO_HIGH, wp.float64(rho[i]))
-        if clumped[i] != 0 and not near_wall(p, pos[i], solid_lo, solid_hi):
-            wp.atomic_add(count, CLUMPED, 1)
-            wp.atomic_min(count, FIRST_CLUMPED, ids[i])
-        u = vel[i]
-        e = mass[i] * (scalar(0.5) * wp.dot(u, u) - wp.dot(p.gravity, pos[i])
-                       + elastic_energy(rho[i], p.rho0, p.eos_b, p.gamma))
-        wp.atomic_add(total, ENERGY, wp.float64(e))
+               solid_hi: wp.array(dtype=vec), total: wp.array(dtype=wp.float64), count: wp.array(dtype=wp.int32),
+               part: wp.array2d(dtype=wp.float64), lead: int, step: int):
+        """Block k's share of the fluid's kinetic + potential + elastic energy into part[k, 0]
+        (sums.py: a fixed order of the terms); total[RHO_LOW], total[RHO_HIGH] hold the lowest and
+        highest density of a fluid particle not at fault seen in any census; count[CLUMPED] counts
+        the clumped fluid particles away from walls and count[FIRST_CLUMPED] holds the first of them.
+        Each block takes its own extremes and count and makes one atomic of each (minima, maxima and
+        integers: the same in any order), not one per particle on the same address. One launch: a
+        CPU's atomics are not atomic across the threads of a split launch."""
+        k = wp.tid()
+        n = ptype.shape[0]
+        energy = wp.float64(0.0)
+        low = wp.float64(1.0e300)
+        high = wp.float64(-1.0e300)
+        clumps = int(0)
+        first = int(NO_FAILURE)
+        for j in range(sums.SPAN):
+            i = sums.member(k, j, lead, step)
+            if i < n:
+                if ptype[i] == FLUID:
+                    if faulty[i] == 0:
+                        low = wp.min(low, wp.float64(rho[i]))
+                        high = wp.max(high, wp.float64(rho[i]))
+                    if clumped[i] != 0 and not near_wall(p, pos[i], solid_lo, solid_hi):
+                        clumps += 1
+                        first = wp.min(first, ids[i])
+                    u = vel[i]
+                    e = mass[i] * (scalar(0.5) * wp.dot(u, u) - wp.dot(p.gravity, pos[i])
+                                   + elastic_energy(rho[i], p.rho0, p.eos_b, p.gamma))
+                    energy = energy + wp.float64(e)
+        part[k, 0] = energy
+        if low <= high:
+            wp.atomic_min(total, RHO_LOW, low)
+            wp.atomic_max(total, RHO_HIGH, high)
+        if clumps > 0:
+            wp.atomic_add(count, CLUMPED, clumps)
+            wp.atomic_min(count, FIRST_CLUMPED, first)
 
     @wp.kernel(enable_backward=False, module="unique")
     def census_check(p: Params, total: wp.array(dtype=wp.float64), count: wp.array(dtype=wp.int32),

@@ -9,6 +9,10 @@ Chunks are strided, not contiguous: particle = wp.tid() * stride + chunk. Fluid 
 particles cost very different amounts and lie in separate index ranges, so contiguous halves
 would leave one core idle. A kernel that reduces (maxima) keeps one slot per chunk, because CPU
 atomics are not atomic across these threads.
+
+Under the strict CPU mode (device_calls.strict) the chunks run one after the other in reverse
+order, as a GPU may run its blocks: a pass whose result depends on the order its threads run in
+then gives other bits on 1, 2 and 3 threads (tests/test_determinism.py).
 """
 import contextlib
 import os
@@ -18,6 +22,9 @@ import warp as wp
 
 
 class Launcher:
+    # set by device_calls.strict: chunks one after the other, last first
+    reverse_chunks = False
+
     def __init__(self, device, threads: int = 0):
         self.device = device
         if not device.is_cpu:
@@ -44,6 +51,10 @@ class Launcher:
             self._loaded.add(kernel)
             return
         k = self.threads
+        if Launcher.reverse_chunks:
+            for chunk in reversed(range(k)):
+                wp.launch(kernel, dim=(n - chunk + k - 1) // k, inputs=[*inputs, chunk, k], device=self.device)
+            return
         futures = [self._pool.submit(wp.launch, kernel, dim=(n - chunk + k - 1) // k, inputs=[*inputs, chunk, k],
                                      device=self.device)
                    for chunk in range(k)]

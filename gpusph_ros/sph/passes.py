@@ -21,7 +21,7 @@ from types import SimpleNamespace
 
 import warp as wp
 
-from . import boundaries, density, eos, health, kernels, momentum, neighbours, shifting, state, viscosity, xsph
+from . import boundaries, density, eos, health, kernels, momentum, neighbours, shifting, state, sums, viscosity, xsph
 
 FLUID = state.FLUID
 BOUNDARY = state.BOUNDARY
@@ -254,20 +254,26 @@ def _force_passes(scalar):
     @wp.kernel(enable_backward=False, module="unique")
     def wall_energy(p: Params, grid: Grid, nbr: wp.array2d(dtype=wp.int32), count: wp.array(dtype=wp.int32),
                     pos: wp.array(dtype=vec), mass: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
-                    total: wp.array(dtype=wp.float64), chunk: int, stride: int):
-        """total[ENERGY] += the energy the repulsive walls (Lennard-Jones, Monaghan-Kajtar) hold, so that
-        the census sums what a conservative wall conserves: a fluid particle pressed against such a
-        wall gives that energy back as motion."""
-        i = wp.tid() * stride + chunk
-        if ptype[i] != FLUID:
-            return
-        e = scalar(0.0)
-        for k in range(count[i]):
-            j = nbr[i, k]
-            if ptype[j] == BOUNDARY:
-                e += repulsion_potential(p, mass[i], mass[j], wp.length(separation(grid, pos[i], pos[j])))
-        if e > scalar(0.0):
-            wp.atomic_add(total, ENERGY, wp.float64(mass[i] * e))
+                    part: wp.array2d(dtype=wp.float64), lead: int, step: int, chunk: int, stride: int):
+        """Block k's share (part[k, 0], sums.py) of the energy the repulsive walls (Lennard-Jones,
+        Monaghan-Kajtar) hold, which the census adds to the fluid's, so that it sums what a
+        conservative wall conserves: a fluid particle pressed against such a wall gives that energy
+        back as motion."""
+        k = wp.tid() * stride + chunk
+        n = ptype.shape[0]
+        held = wp.float64(0.0)
+        for q in range(sums.SPAN):
+            i = sums.member(k, q, lead, step)
+            if i < n:
+                if ptype[i] == FLUID:
+                    e = scalar(0.0)
+                    for m in range(count[i]):
+                        j = nbr[i, m]
+                        if ptype[j] == BOUNDARY:
+                            e += repulsion_potential(p, mass[i], mass[j], wp.length(separation(grid, pos[i], pos[j])))
+                    if e > scalar(0.0):
+                        held = held + wp.float64(mass[i] * e)
+        part[k, 0] = held
 
     @wp.kernel(enable_backward=False, module="unique")
     def shepard(p: Params, grid: Grid, nbr: wp.array2d(dtype=wp.int32), count: wp.array(dtype=wp.int32), f: Fields,

@@ -14,7 +14,22 @@ import math
 import numpy as np
 import warp as wp
 
-from . import bodies, boundaries, density, eos, graph, health, kernels, levels, passes, shifting, viscosity, xsph
+from . import (
+    bodies,
+    boundaries,
+    density,
+    eos,
+    graph,
+    health,
+    kernels,
+    levels,
+    passes,
+    scan,
+    shifting,
+    sums,
+    viscosity,
+    xsph,
+)
 from .config import RESET_FIELDS, SolverConfig, check_device
 from .health import HealthError
 from .kernels import COARSER_LEVELS, EVERY_LEVEL, FINEST_LEVEL
@@ -187,7 +202,11 @@ class Solver:
             # the floating bodies' state, half step and candidate, and the last evaluation's force
             # and torque on each
             self._rigid, self._rigid_h, self._rigid_c = (B.rigid_states(cfg.motions, dev) for _ in range(3))
-            self._body_sums = wp.zeros((nb, 2), dtype=wp.vec3d, device=dev)
+            # force and torque of body b at 2 b and 2 b + 1, summed in a fixed order (sums.py), as is the
+            # bodies' work on the fluid
+            self._body_sums = wp.zeros(2 * nb, dtype=wp.vec3d, device=dev)
+            self._wrench_part = sums.Partials(n, 2 * nb, wp.vec3d, dev)
+            self._work_part = sums.Partials(n, 1, wp.float64, dev)
             self._gravity64 = wp.vec3d(*cfg.gravity)
             self._walls64 = (wp.vec3d(*cfg.wall_lo), wp.vec3d(*cfg.wall_hi))
             # the fixed obstacles' boxes a floating body meets (in float64, as its state), and whether
@@ -216,16 +235,18 @@ class Solver:
         self._want, self._vacant, self._want_rank, self._vacant_rank, self._free = (
             wp.zeros(m, dtype=wp.int32, device=dev) for _ in range(5))
         self._offsets = arr(levels.sub_offsets(2, cfg.dim), v)
+        self._scan = scan.Scan(m, dev)  # the slots' ranks: its scratch allocated here, never in the step
         self._fail = arr(np.full(health.N_CHECKS, health.NO_FAILURE, dtype=np.int32), wp.int32)
         # the census sums (health.CENSUS_START); clumped fluid particles and the first of them
         self._energy_sum = arr(np.array(health.CENSUS_START), wp.float64)
+        self._energy_part = sums.Partials(n, 1, wp.float64, dev)
         self._clumped = wp.zeros(n, dtype=wp.int32, device=dev)
         self._clump_count = arr(np.array([0, health.NO_FAILURE], dtype=np.int32), wp.int32)
         # exclusions (health.py): fluid particles at fault in the candidate, their count by reason and
         # mass until the step commits; the run's counts, and [mass, time of the first or -1]
         self._faulty = wp.zeros(n, dtype=wp.int32, device=dev)
         self._pending = wp.zeros(health.N_REASONS, dtype=wp.int32, device=dev)
-        self._pending_mass = wp.zeros(1, dtype=wp.float64, device=dev)
+        self._pending_units = wp.zeros(1, dtype=wp.int64, device=dev)  # in Params.mass_units
         self._excluded = wp.zeros(health.N_REASONS, dtype=wp.int32, device=dev)
         self._excluded_mass = arr(np.array([0.0, -1.0]), wp.float64)
         self._clock = wp.zeros(N_CLOCK, dtype=wp.float64, device=dev)  # slots state.T ... TARGET
@@ -322,9 +343,9 @@ class Solver:
         wp.launch(k.check_particles, dim=n,
                   inputs=[p, self.pos, self._pos_c, self._vel_c, self._rho_c, self.mass, self.hsml, self.ptype,
                           self.ids, self.solid_lo, self.solid_hi, self._fail, self._faulty, self._pending,
-                          self._pending_mass], device=dev)
+                          self._pending_units], device=dev)
         wp.capture_if(self.flag(CENSUS_DUE), on_true=self._census)
-        wp.launch(k.exclusion_check, dim=1, inputs=[p, self._clock, self._pending, self._pending_mass,
+        wp.launch(k.exclusion_check, dim=1, inputs=[p, self._clock, self._pending, self._pending_units,
                                                     self._excluded, self._excluded_mass, self._fail], device=dev)
         wp.launch(k.commit, dim=n, inputs=[self._fail, self._faulty, self._pos_c, self._vel_c, self._rho_c, self.pos,
                                            self.vel, self.rho, self.ptype, self._needs_list, self.neighbours.stale],
@@ -341,9 +362,11 @@ class Solver:
         """The moving bodies' work on the fluid over the step (bodies.work_on_fluid), from the rates
         just evaluated at its midpoint over every level."""
         if self._moving:
-            wp.launch(bodies.build(self.scalar).work_on_fluid, dim=self.n,
-                      inputs=[self._laws, self._clock, self.params.coarse_stride, self.ptype, self.body, self.mass,
-                              self.acc, self._vel_h, self._energy_sum, health.WORK], device=self.device)
+            part = self._work_part
+            self.launch(bodies.build(self.scalar).work_on_fluid, part.count,
+                        [self._laws, self._clock, self.params.coarse_stride, self.ptype, self.body, self.mass, self.acc,
+                         self._vel_h, *part.args()])
+            part.total(self._energy_sum, health.WORK, add=True)
 
     def _move_walls(self, factor: float, pos, vel, into: int = 0):
         """The moving bodies' poses at t + factor dt (bodies.body_poses: a floating body's state
@@ -367,10 +390,10 @@ class Solver:
     def _body_wrench(self, f):
         """Each floating body's force and torque from the fluid of the force pass just made on ``f``."""
         if self._floating:
-            self._body_sums.zero_()
-            wp.launch(bodies.build(self.scalar).wrench_sums, dim=self.n,
-                      inputs=[self._laws, self._poses, self.ptype, self.body, f.pos, self.mass, self.acc,
-                              self._body_sums], device=self.device)
+            part = self._wrench_part
+            self.launch(bodies.build(self.scalar).wrench_sums, part.count,
+                        [self._laws, self._poses, self.ptype, self.body, f.pos, self.mass, self.acc, *part.args()])
+            part.total(self._body_sums)
 
     def drive(self, body: int, t0: float, position, quaternion, velocity, omega, acceleration,
               angular_acceleration):
@@ -420,16 +443,19 @@ class Solver:
                 for r, m in zip(rigid, self.config.motions)]
 
     def _census(self):
-        """The fluid's energy and clumping, checked against the run's limits (health.census)."""
-        n, p, k = self.n, self.params, self._passes
-        self._energy_sum[health.ENERGY:health.ENERGY + 1].zero_()
-        wp.launch(k.census, dim=n, inputs=[p, self._pos_c, self._vel_c, self._rho_c, self.mass, self.ptype,
-                                           self.ids, self._clumped, self._faulty, self.solid_lo,
-                                           self.solid_hi, self._energy_sum, self._clump_count], device=self.device)
+        """The fluid's energy and clumping, checked against the run's limits (health.census), the
+        energy summed in a fixed order (sums.py)."""
+        p, k, part = self.params, self._passes, self._energy_part
+        wp.launch(k.census, dim=part.count, inputs=[p, self._pos_c, self._vel_c, self._rho_c, self.mass, self.ptype,
+                                                    self.ids, self._clumped, self._faulty, self.solid_lo,
+                                                    self.solid_hi, self._energy_sum, self._clump_count,
+                                                    *part.args()], device=self.device)
+        part.total(self._energy_sum, health.ENERGY)
         if self.boundary.repulsive and self.n > self.n_fluid:
             nl = self.neighbours
-            self.launch(k.wall_energy, n, [p, nl.grid, nl.nbr, nl.count, self._pos_c, self.mass, self.ptype,
-                                           self._energy_sum])
+            self.launch(k.wall_energy, part.count, [p, nl.grid, nl.nbr, nl.count, self._pos_c, self.mass, self.ptype,
+                                                    *part.args()])
+            part.total(self._energy_sum, health.ENERGY, add=True)
         wp.launch(k.census_check, dim=1, inputs=[p, self._energy_sum, self._clump_count, self._fail],
                   device=self.device)
 
@@ -514,8 +540,8 @@ class Solver:
         wp.launch(L.relevel, dim=n, inputs=[p, self.pos, self.hsml, self.ptype, self._needs_list,
                                             self._zone_lo, self._zone_hi, self._zone_h, self._spawned, self._want,
                                             self._vacant], device=dev)
-        wp.utils.array_scan(self._want, self._want_rank, inclusive=False)
-        wp.utils.array_scan(self._vacant, self._vacant_rank, inclusive=False)
+        self._scan(self._want, self._want_rank)
+        self._scan(self._vacant, self._vacant_rank)
         wp.launch(L.free_slots, dim=n, inputs=[self._vacant, self._vacant_rank, self._free], device=dev)
         wp.launch(L.spawn, dim=n, inputs=[p, self._want, self._want_rank, self._vacant, self._vacant_rank, self._free,
                                           self._offsets, self.pos, self.vel, self.rho, self.mass, self.hsml,
@@ -557,7 +583,8 @@ class Solver:
                 continue
             if check == "excluded_fraction":
                 counts = self._excluded_host[0] + self._pending.numpy()
-                mass = self._excluded_host[1][health.MASS] + float(self._pending_mass.numpy()[0])
+                pending = float(self._pending_units.numpy()[0]) / self.params.mass_units
+                mass = self._excluded_host[1][health.MASS] + pending
                 raise HealthError(check, int(steps[FAILED_STEP]), float(clock[T_FAILED]), -1,
                                   f"{mass / self._fluid_mass:.2%} of the fluid mass would be excluded "
                                   f"({self.describe_excluded(counts)}), more than max_excluded_fraction "
@@ -722,7 +749,7 @@ class Solver:
         self._fail.assign(np.full(health.N_CHECKS, health.NO_FAILURE, dtype=np.int32))
         self.flag(LISTS_HOLD).fill_(1)
         self._pending.zero_()
-        self._pending_mass.zero_()
+        self._pending_units.zero_()
         steps = self._steps.numpy()
         steps[FAILED_STEP] = -1
         self._steps.assign(steps)
@@ -768,6 +795,8 @@ class Solver:
                     yield from arrays(item)
             elif isinstance(value, wp.array):
                 yield value
+            elif isinstance(value, (sums.Partials, scan.Scan)):  # scratch of fixed-order sums and scans
+                yield from arrays(list(vars(value).values()))
             elif hasattr(value, "_cls"):  # a Warp struct instance: its array members
                 for name in getattr(value._cls, "vars", {}):
                     yield from arrays(getattr(value, name))

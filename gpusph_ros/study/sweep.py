@@ -23,6 +23,19 @@ def _local_cluster(study, device: str):
     return cluster, gpus
 
 
+def worker_device(gpus: int) -> str:
+    """The GPU of the worker that asks: the local cluster's worker j (named j) owns cuda:j mod gpus.
+    Each worker runs one case at a time (one thread), so no two runs share a GPU while another idles,
+    as they could when each case was given cuda:(its index mod gpus)."""
+    from distributed import get_worker
+
+    return f"cuda:{int(get_worker().name) % gpus}"
+
+
+def _on_own_gpu(case: dict, out: str, metrics, threads: int, gpus: int):
+    return run_case(case, out, metrics, threads, worker_device(gpus))
+
+
 def sweep(study, scheduler=None, client=None, progress=print) -> list:
     """Run every unfinished case of ``study``; the rows of all its cases, in case order."""
     from distributed import Client, as_completed
@@ -45,9 +58,9 @@ def sweep(study, scheduler=None, client=None, progress=print) -> list:
         progress(f"{study.name}: {len(cases)} cases, {len(cases) - len(todo)} already finished, {len(todo)} to run "
                  f"on {workers} worker(s) -> {study.out}")
         futures = {}
-        for k, case in enumerate(todo):
-            dev = f"cuda:{k % gpus}" if gpus else None
-            future = client.submit(run_case, dataclasses.asdict(case), str(study.out), study.metrics, threads, dev,
+        for case in todo:
+            task, last = (_on_own_gpu, gpus) if gpus else (run_case, None)
+            future = client.submit(task, dataclasses.asdict(case), str(study.out), study.metrics, threads, last,
                                    key=f"{study.name}/{case.name}", pure=False)
             futures[future] = case
         start = time.perf_counter()
