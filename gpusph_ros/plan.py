@@ -41,13 +41,14 @@ def plan(scene, run_config, calibration_steps: int = 30) -> dict:
     solver = model.solver()
     # timed on the loop a run steps with (Solver.advance: replayed from its capture, or eager), not
     # step by step, which reads the device twice a step; the first steps load the kernels and capture
-    # the loop, untimed
+    # the loop, untimed. Aimed with the step the conditions allow (dt_stable): an advance's last step
+    # is cut short to land on its target
     solver.step()
-    solver.advance(solver.time + 2.0 * solver.dt)
+    solver.advance(solver.time + 2.0 * solver.dt_stable)
     wp.synchronize_device(solver.device)
     t0, steps0 = solver.time, solver.steps
     start = time.perf_counter()
-    solver.advance(solver.time + calibration_steps * solver.dt)
+    solver.advance(solver.time + calibration_steps * solver.dt_stable)
     wp.synchronize_device(solver.device)
     wall = time.perf_counter() - start
     steps = solver.steps - steps0

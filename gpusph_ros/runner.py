@@ -11,6 +11,7 @@ on ``/tf`` with each output.
 import dataclasses
 import datetime
 import functools
+import math
 import platform
 import subprocess
 import time
@@ -26,7 +27,9 @@ from .measure import cloud
 from .measure.suite import Measurements
 from .output import frames, markers, messages, state_file
 from .scenes.build import build_run
-from .sph import bodies, checkpoint
+from .scenes.settings import check_output
+from .sph import ConfigError, bodies, checkpoint
+from .sph.config import shown
 
 NAMESPACE = "/sim_node"
 WRENCH_TIMEOUT = 0.5  # [s] of simulated time an external wrench on a floating body is held
@@ -191,27 +194,45 @@ class Run:
                 "output": dataclasses.asdict(self.output)}
 
     def check_state(self, state) -> tuple:
-        """(next_output, wall, time origin) of ``state`` if it is ``checkpoint()`` of a run of this
-        scene and settings; else ValueError, KeyError or TypeError saying what does not fit."""
+        """(next_output, wall, time origin, output settings) of ``state`` if it is ``checkpoint()`` of
+        a run of this scene and settings; else ValueError, KeyError or TypeError saying what does not
+        fit. Its counters are checked against each other: the outputs done are those its time has
+        passed (a next output of -1e9 published 900 empty outputs a second), its output settings are
+        in their ranges, its wall time finite, its stamps' origin no later than now."""
         if not isinstance(state, dict) or state.get("format") != CHECKPOINT_FORMAT:
             raise ValueError(f"checkpoint: not a run's state of format {CHECKPOINT_FORMAT}")
-        output = {f.name for f in dataclasses.fields(self.output)}
-        if not isinstance(state.get("output"), dict) or set(state["output"]) != output:
-            raise ValueError(f"checkpoint: its output settings are not {', '.join(sorted(output))}")
+        fields = {f.name for f in dataclasses.fields(self.output)}
+        if not isinstance(state.get("output"), dict) or set(state["output"]) != fields:
+            raise ValueError(f"checkpoint: its output settings are not {', '.join(sorted(fields))}")
         problem = checkpoint.mismatch(self.solver, state["solver"])
         if problem:
             raise ValueError(f"checkpoint: {problem}")
-        return int(state["next_output"]), float(state["wall"]), int(state["time_origin_ns"])
+        try:
+            output = check_output(dataclasses.replace(self.output, **state["output"]))
+        except ConfigError as err:
+            raise ValueError(f"checkpoint: its output settings: {err}") from None
+        next_output, wall, origin = state.get("next_output"), state.get("wall"), state.get("time_origin_ns")
+        t = state["solver"]["host"]["solver"]["time"]
+        passed = int(np.floor(t * output.output_rate + 1e-9)) + 1  # outputs at or before t
+        if type(next_output) is not int or next_output not in (passed - 1, passed):
+            raise ValueError(f"checkpoint: its next output {shown(next_output)} is not the next after t = {t:.6g} s "
+                             f"at {output.output_rate:g} Hz ({passed - 1} or {passed})")
+        if not (isinstance(wall, float) and math.isfinite(wall) and wall >= 0.0):
+            raise ValueError(f"checkpoint: its wall time {shown(wall)} is not a time")
+        latest = time.time_ns() if output.stamps == "epoch" else 0
+        if type(origin) is not int or not (0 <= origin <= latest):
+            raise ValueError(f"checkpoint: its stamps' origin {shown(origin)} is not a time between 0 and now "
+                             f"({output.stamps} stamps)")
+        return next_output, wall, origin, output
 
     def restore(self, state: dict, fitted: tuple = None):
         """Continue from ``checkpoint()`` of a run of the same scene and settings: nothing changes for
         a state that does not fit. ``fitted``: what ``check_state(state)`` returned, when the caller
         has checked it already."""
-        next_output, wall, origin = fitted or self.check_state(state)
+        next_output, wall, origin, output = fitted or self.check_state(state)
         checkpoint.put(self.solver, state["solver"])
         self.measurements.restart()
-        self.next_output, self.wall, self.time_origin_ns = next_output, wall, origin
-        self.output = dataclasses.replace(self.output, **state["output"])
+        self.next_output, self.wall, self.time_origin_ns, self.output = next_output, wall, origin, output
 
     def open_recording(self, path, compression: str = None, earlier: list = None):
         """A BagRecorder at ``path`` with this run's topics declared and its latched messages written
@@ -373,7 +394,7 @@ def resume(folder):
     ``.superseded``, and a new file ``<name>_<k>.mcap`` opened after them. ValueError, before
     anything in the folder changes, when there is nothing to resume or when the bag no longer holds
     every message the checkpoint counts (the resumed recording would have a gap)."""
-    from .output.recording import bag_files, file_entries, is_whole, repair, whole_messages
+    from .output.recording import bag_files, file_entries, is_whole, messages_before, repair, whole_messages
     from .scenes.schema import load_scene
     from .scenes.settings import resolve
 
@@ -392,7 +413,10 @@ def resume(folder):
         scene = load_scene(invocation["scene"])
         run = Run(scene, resolve(scene, files=invocation["run_config"], sets=invocation["sets"]))
         run.restore(state["run"])
-        counted_file, counted = str(recording["file"]), int(recording["messages"])
+        counted_file, counted = recording["file"], recording["messages"]
+        if not isinstance(counted_file, str) or type(counted) is not int or counted < 1:
+            raise ValueError(f"its recording's file {shown(counted_file)} and count {shown(counted)} are not a file "
+                             "name and a count of messages")
     except (KeyError, TypeError, ValueError) as err:  # ConfigError and StateFileError are ValueErrors
         raise ValueError(f"--resume: {err}" if isinstance(err, ValueError) else
                          f"--resume: {path} is not a checkpoint this version wrote ({type(err).__name__}: {err})"
@@ -420,6 +444,11 @@ def resume(folder):
             f"its checkpoint counts, at t = {run.solver.time:.4f} s: the file was cut after the checkpoint was "
             "written, and a resumed run would leave a gap in the recording. The run cannot be resumed from this "
             "checkpoint; gpusph-analyze --repair makes what the bag holds readable")
+    before = messages_before(files[k], run.time_origin_ns + int(round(run.solver.time * 1e9)))
+    if counted < before:
+        raise ValueError(f"--resume: its checkpoint counts {counted:,} messages of {files[k].name}, which holds "
+                         f"{before:,} from before the checkpoint's t = {run.solver.time:.4f} s: cutting the file back "
+                         "to the count would lose them; the checkpoint does not belong to this recording")
     for later in files[k + 1:]:
         later.replace(later.with_name(later.name + ".superseded"))
     if not whole or held != counted:

@@ -61,3 +61,45 @@ def test_a_state_of_another_solver_is_refused_with_what_differs():
     other = build(load_scene("collapse_2d"), dx=0.02).solver()
     with pytest.raises(ValueError, match="checkpoint: .* has shape"):
         checkpoint.restore(other, checkpoint.capture(small))
+
+
+def _digest(solver) -> dict:
+    return checkpoint.fingerprint(checkpoint.capture(solver))
+
+
+def test_an_edited_state_is_refused_whole_and_changes_nothing():
+    # a count or size from the file (n x 100 crashed the node: kernels indexed past the arrays), a
+    # shifted position beside a later array of the wrong trailing shape or dtype (the shift was
+    # already in when the later array failed), an index out of range, a NaN: each refused by name
+    solver = build(parse_scene(BODIES), dx=0.02).solver()
+    solver.advance(0.01)
+    good = checkpoint.capture(solver)
+    before = _digest(solver)
+
+    def edited(arrays=None, **host):
+        state = {"arrays": {**good["arrays"], **(arrays or {})}, "host": {k: dict(v) for k, v in good["host"].items()}}
+        for name, value in host.items():
+            holder, key = name.split("__")
+            state["host"][holder][key] = value
+        return state
+
+    shifted = good["arrays"]["solver.pos"] + np.float32(0.3)
+    for state, why in [
+            (edited(solver__n=good["host"]["solver"]["n"] * 100), "solver value n differs"),
+            (edited(neighbours__n=good["host"]["neighbours"]["n"] * 100), "neighbours value n differs"),
+            (edited({"solver.pos": shifted, "solver.vel": good["arrays"]["solver.vel"][:, :2]}),
+             "solver.vel has shape"),
+            (edited({"solver.pos": shifted, "solver.rho": good["arrays"]["solver.rho"].astype(np.complex128)}),
+             "solver.rho holds complex128"),
+            (edited({"solver.pos": shifted, "solver.mass": good["arrays"]["solver.mass"].astype(str)}),
+             "solver.mass holds <U"),
+            (edited({"solver.ids": good["arrays"]["solver.ids"] + 5}), "solver.ids is not an order"),
+            (edited({"solver.body": good["arrays"]["solver.body"] + 7}), "solver.body lies outside"),
+            (edited({"solver.vel": good["arrays"]["solver.vel"] * np.nan}), "solver.vel holds a value that is not"),
+            (edited(solver__time=float("nan")), "solver value time is not a value"),
+            (edited(neighbours__max_neighbours=100_000), "lists are 100000 wide")]:
+        with pytest.raises(ValueError, match=why):
+            checkpoint.restore(solver, state)
+        assert _digest(solver) == before, why
+    checkpoint.restore(solver, good)  # the state itself still goes in and runs
+    solver.advance(0.02)

@@ -1,6 +1,7 @@
 """Checkpoint and resume (`gpusph-run --resume DIR`): a run stopped, or killed, and resumed records
 what the same run never stopped records, bit for bit on the CPU, and its bag (files _0, _1, ...)
 reads whole with rosbags and the analysis."""
+import copy
 import os
 import pickle
 import signal
@@ -203,3 +204,41 @@ def test_a_run_of_a_scene_file_resumes_from_another_folder(tmp_path):
                              cwd=work, capture_output=True, text=True, timeout=300, env={**os.environ,
                                                                                         "PYTHONPATH": str(REPO)})
     assert resumed.returncode == 0 and "my_collapse" in resumed.stdout, resumed.stdout + resumed.stderr
+
+
+def test_a_checkpoint_with_edited_numbers_is_refused_and_the_folder_left_as_it_was(tmp_path):
+    """A next output of -1e9 published 900 empty outputs a second, an output rate of 1e12 likewise,
+    a stamps' origin of 1e30 made every output fail, a NaN time ran from t = nan s, and a message
+    count of 0 or -5 emptied the bag's file: each is refused by name, before the folder changes."""
+    from gpusph_ros.output import state_file
+
+    folder = tmp_path / "edited"
+    _stopped_run(folder)
+    path = folder / CHECKPOINT_FILE
+    good = state_file.read(path, "checkpoint")
+    before = sorted((p.name, p.stat().st_size) for p in folder.iterdir() if p.name != CHECKPOINT_FILE)
+
+    def edit(change):
+        state = copy.deepcopy(good)
+        change(state)
+        return state
+
+    def time_nan(s):
+        s["run"]["solver"]["host"]["solver"]["time"] = float("nan")
+
+    cases = [(lambda s: s["run"].update(next_output=-1_000_000_000), "next output -1000000000 is not"),
+             (lambda s: s["run"]["output"].update(output_rate=1e12), "output_rate"),
+             (lambda s: s["run"].update(time_origin_ns=1e30), "stamps' origin 1e\\+30"),
+             (lambda s: s["run"].update(wall=float("nan")), "wall time nan"),
+             (time_nan, "solver value time is not a value"),
+             (lambda s: s["recording"].update(messages=0), "count 0 are not"),
+             (lambda s: s["recording"].update(messages=-5), "count -5 are not"),
+             (lambda s: s["recording"].update(messages=3), "would lose them")]
+    for change, why in cases:
+        state_file.write(path, "checkpoint", edit(change))
+        with pytest.raises(ValueError, match=why):
+            resume(folder)
+        assert sorted((p.name, p.stat().st_size) for p in folder.iterdir() if p.name != CHECKPOINT_FILE) == before
+    state_file.write(path, "checkpoint", good)
+    run, recorder, _ = resume(folder)  # the checkpoint as written still resumes
+    recorder.close({"status": "stopped"})

@@ -2,6 +2,8 @@
 reads back equal, type for type; numpy reads it as an .npz without pickle; a pickle (what earlier
 versions wrote), a file cut anywhere, a FIFO, a folder, another kind of state, compressed or
 object members are each refused with the reason, and nothing a file holds is ever run."""
+import io
+import json
 import os
 import pickle
 import threading
@@ -139,3 +141,46 @@ def test_a_fifo_a_folder_or_a_device_is_refused_at_once(tmp_path):
     assert isinstance(err, StateFileError) and "is a device" in str(err)
     err = _within(2.0, state_file.read, tmp_path / "none.npz", "checkpoint")
     assert isinstance(err, StateFileError) and "cannot be opened: No such file" in str(err)
+
+
+def _rewrite_header(path, change):
+    """``path`` with its header's JSON changed by ``change`` (a function of the header dict)."""
+    with zipfile.ZipFile(path) as z:
+        members = {name: z.read(name) for name in z.namelist()}
+    header = json.loads(np.lib.format.read_array(io.BytesIO(members["header.npy"])).tobytes().decode())
+    buffer = io.BytesIO()
+    np.lib.format.write_array(buffer, np.frombuffer(json.dumps(change(header)).encode(), dtype=np.uint8))
+    members["header.npy"] = buffer.getvalue()
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_STORED) as z:
+        for name, data in members.items():
+            z.writestr(name, data)
+
+
+def test_a_member_named_twice_is_refused_and_nothing_is_quoted_whole(tmp_path):
+    # an 8 MB member named 300 times took a reader to 2.8 GB: each member is read once
+    path = state_file.write(tmp_path / "state.npz", "checkpoint", {"a": np.zeros(10), "b": np.ones(3)})
+    _rewrite_header(path, lambda h: {**h, "state": {"a": {"__array__": 0}, "b": [{"__array__": 0}] * 300}})
+    with pytest.raises(StateFileError, match="names member a0.npy twice"):
+        state_file.read(path, "checkpoint")
+    for field in ("version", "kind"):
+        _rewrite_header(path, lambda h: {**h, field: "v" * 1_000_000})
+        with pytest.raises(StateFileError) as err:
+            state_file.read(path, "checkpoint")
+        assert len(str(err.value)) < 600, field
+    _rewrite_header(path, lambda h: {**h, "version": state_file.VERSION, "kind": "checkpoint",
+                                     "state": {"a": {"__array__": "r" * 1_000_000}}})
+    with pytest.raises(StateFileError, match="is not a number") as err:
+        state_file.read(path, "checkpoint")
+    assert len(str(err.value)) < 600
+
+
+def test_a_tree_nested_too_deep_is_refused_as_such(tmp_path):
+    path = state_file.write(tmp_path / "state.npz", "checkpoint", {"a": 1})
+    text = json.dumps({"format": state_file.FORMAT, "version": state_file.VERSION, "kind": "checkpoint",
+                       "state": "PLACEHOLDER"}).replace('"PLACEHOLDER"', "[" * 100_000 + "]" * 100_000)
+    buffer = io.BytesIO()
+    np.lib.format.write_array(buffer, np.frombuffer(text.encode(), dtype=np.uint8))
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_STORED) as z:
+        z.writestr("header.npy", buffer.getvalue())
+    with pytest.raises(StateFileError, match="nested deeper"):
+        state_file.read(path, "checkpoint")

@@ -315,6 +315,12 @@ def whole_messages(file) -> tuple:
     return count, last
 
 
+def messages_before(file, log_time: int) -> int:
+    """The whole messages of an MCAP file, cut or not, logged before ``log_time`` [ns]."""
+    with open(file, "rb") as f:
+        return sum(isinstance(r, Message) and r.log_time < log_time for r in _records(f))
+
+
 def repair(path, compression: str = "zstd", keep: int = None) -> dict:
     """Rebuild a killed recording's MCAP summary and footer from its complete chunks, in place
     (the bag's last file; the cut file is kept beside it as ``<file>.cut``, its chunks written

@@ -12,6 +12,11 @@ Such a file is recognised by its first byte and refused, saying why; it is never
 
 Only a regular file is read or replaced: a FIFO, a device or a folder named as a state file is
 refused at once (opening a FIFO to read blocks until a writer comes, and would hang the caller).
+
+A file cannot make its reader hold more than the file's own size in arrays: members are stored, not
+compressed, each is read once, and a tree that names one member twice is refused (the writer names
+each array once; an 8 MB member named 300 times took a reader to 2.8 GB). Nothing the file holds is
+quoted whole in an error.
 """
 import io
 import json
@@ -22,6 +27,8 @@ import zipfile
 from pathlib import Path
 
 import numpy as np
+
+from ..sph.config import shown
 
 FORMAT = "gpusph_ros state"
 VERSION = 2  # 1: the pickle of earlier versions, never read
@@ -147,6 +154,8 @@ def read(path, kind: str, keys=()) -> dict:
                 state = _read_zip(z, kind)
         except StateFileError:
             raise
+        except RecursionError:
+            raise StateFileError(f"{path} cannot be read: its tree is nested deeper than a state is") from None
         except Exception as err:  # a cut or damaged file: zipfile's, numpy's and json's errors alike
             raise StateFileError(f"{path} cannot be read: it is cut short or damaged ({type(err).__name__}: "
                                  f"{err})") from None
@@ -171,13 +180,17 @@ def _read_zip(z: zipfile.ZipFile, kind: str) -> dict:
     if not isinstance(header, dict) or header.get("format") != FORMAT:
         raise StateFileError("it is an .npz but not a gpusph_ros state file")
     if header.get("version") != VERSION:
-        raise StateFileError(f"it is of format version {header.get('version')!r}; this version reads {VERSION}")
+        raise StateFileError(f"it is of format version {shown(header.get('version'))}; this version reads {VERSION}")
     if header.get("kind") != kind:
-        raise StateFileError(f"it is a {header.get('kind')!r}, not a {kind!r}")
+        raise StateFileError(f"it is a {shown(header.get('kind'))}, not a {kind!r}")
+    read_once = set()
 
     def array(k):
         if not isinstance(k, int) or isinstance(k, bool):
-            raise StateFileError(f"an array reference {k!r} is not a number")
+            raise StateFileError(f"an array reference {shown(k)} is not a number")
+        if k in read_once:
+            raise StateFileError(f"it names member a{k}.npy twice; a state file names each array once")
+        read_once.add(k)
         return _member(z, f"a{k}.npy")
 
     return _decode(header["state"], array)

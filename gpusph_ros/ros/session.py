@@ -326,8 +326,8 @@ class Session:
             state = state_file.read(path, NODE_STATE, ("scene", "settings", "run", "t"))
         except state_file.StateFileError as err:
             return False, f"cannot read a state: {err}"
-        scene, settings, t = state["scene"], state["settings"], state["t"]
-        if not (isinstance(scene, str) and isinstance(settings, dict) and isinstance(t, float)):
+        scene, settings = state["scene"], state["settings"]
+        if not (isinstance(scene, str) and isinstance(settings, dict) and isinstance(state["t"], float)):
             return False, f"cannot read a state: {path} holds no scene text, settings and time"
         run = self.run
         present = run.run_config.as_dict()
@@ -350,7 +350,7 @@ class Session:
             self._held(load)
         except (KeyError, TypeError, ValueError) as err:  # checked before the run changes
             return False, f"cannot load the state in {path}: {err}"
-        return True, f"loaded the state at t = {t:.4f} s from {path}; {self.state}"
+        return True, f"loaded the state at t = {self.run.solver.time:.4f} s from {path}; {self.state}"
 
     def clear(self):
         """Drop the run (lifecycle cleanup)."""

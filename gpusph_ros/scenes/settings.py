@@ -116,20 +116,13 @@ def _coerce(key, value):
     return value
 
 
-def resolve(scene: Scene, files=(), sets=(), **overrides) -> RunConfig:
-    """The run configuration of ``scene``: its run section, then ``files``, then ``sets``
-    (``key=value`` strings), then keyword ``overrides``."""
-    layers = [scene.run_settings] + [read_run_file(f) for f in files] + [dict(parse_set(s) for s in sets), overrides]
-    merged = {}
-    for layer in layers:
-        for key, value in layer.items():
-            if key in SCENE_FIELDS:
-                raise ConfigError(key, value, "a run setting (this one is set by the scene); the settings are "
-                                  + ", ".join(RUN_KEYS))
-            if key not in RUN_KEYS:
-                raise unknown_key("", key, RUN_KEYS, "run_config", noun="settings")
-            merged[key] = _coerce(key, value)
-    output = Output(**{k: merged.pop(k) for k in OUTPUT_FIELDS if k in merged})
+def check_output(output: Output) -> Output:
+    """``output``, or ConfigError naming the first field out of its range or choices (a setting, or
+    what a state file says a run's outputs were)."""
+    for key in ("end_time", "output_rate", "particle_rate", "checkpoint_interval"):
+        value = getattr(output, key)
+        if not isinstance(value, (int, float)) or isinstance(value, bool):
+            raise ConfigError(key, value, "a number")
     if not (math.isfinite(output.end_time) and MIN_END_TIME <= output.end_time <= MAX_END_TIME):
         raise ConfigError("end_time", output.end_time, f"a time in [{MIN_END_TIME:g}, {MAX_END_TIME:g}] s")
     if not (math.isfinite(output.output_rate) and MIN_OUTPUT_RATE <= output.output_rate <= MAX_OUTPUT_RATE):
@@ -144,6 +137,24 @@ def resolve(scene: Scene, files=(), sets=(), **overrides) -> RunConfig:
     for key, choices in (("compression", COMPRESSIONS), ("stamps", STAMPS)):
         if getattr(output, key) not in choices:
             raise ConfigError(key, getattr(output, key), "one of " + ", ".join(choices))
+    return output
+
+
+def resolve(scene: Scene, files=(), sets=(), **overrides) -> RunConfig:
+    """The run configuration of ``scene``: its run section, then ``files``, then ``sets``
+    (``key=value`` strings), then keyword ``overrides``."""
+    layers = [scene.run_settings] + [read_run_file(f) for f in files] + [dict(parse_set(s) for s in sets), overrides]
+    merged = {}
+    for layer in layers:
+        for key, value in layer.items():
+            if key in SCENE_FIELDS:
+                raise ConfigError(key, value, "a run setting (this one is set by the scene); the settings are "
+                                  + ", ".join(RUN_KEYS))
+            if key not in RUN_KEYS:
+                raise unknown_key("", key, RUN_KEYS, "run_config", noun="settings")
+            merged[key] = _coerce(key, value)
+    output = Output(**{k: merged.pop(k) for k in OUTPUT_FIELDS if k in merged})
+    check_output(output)
     reduction = Reduction(**{k: merged.pop(k) for k in REDUCTION_FIELDS if k in merged}).validate()
     numerics = {k: merged[k] for k in NUMERIC_FIELDS if k in merged}
     cfg = SolverConfig(dim=scene.dim, gravity=scene.gravity, depth=scene.depth, periodic=scene.periodic,

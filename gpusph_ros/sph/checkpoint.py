@@ -11,9 +11,28 @@ launcher) is built again from the same configuration.
 
 The lists are stored, not rebuilt from their build positions: particles change level between two
 builds (levels.py) and a list built again after that would differ from the one the run holds.
+
+A state comes from a file, and a file may have been edited: it is checked whole before anything
+changes (``mismatch``). Every array has this solver's shape and dtype exactly; the arrays whose
+values index others hold indices in range (a particle's id, kind and body, the cell order and
+ranges, the lists); no float is NaN; the host values a run carries (CARRIED: its time, step, the
+lists' width) are of their kind and range, and every other host value (a particle count, a level's
+h) equals the live solver's, since a count set from a file let kernels index past the arrays. Only
+then is every array staged on the device and copied in (``put``), so that a refusal changes nothing.
 """
+import hashlib
+import math
+
 import numpy as np
 import warp as wp
+
+from .state import BOUNDARY, DT, DT_STABLE, EXCLUDED, FLUID, PASSIVE, TARGET, VACANT, T
+
+# the host values a state carries from its run, each checked for its kind and range; every other
+# host value is fixed by the configuration and the particles and must equal the live solver's
+CARRIED = {"solver": ("time", "dt", "dt_stable", "steps", "_excluded_host", "_census_host"),
+           "neighbours": ("max_neighbours",)}
+KINDS = (FLUID, BOUNDARY, EXCLUDED, PASSIVE, VACANT)
 
 PLAIN = (bool, int, float, str, type(None), np.ndarray, np.generic)
 
@@ -67,9 +86,16 @@ def _width(state) -> "int | None":
     return width if isinstance(width, int) and not isinstance(width, bool) and width > 0 else None
 
 
+def _copied(value):
+    """``value`` with its arrays copied: a state is what the run held when it was taken."""
+    if isinstance(value, (tuple, list)):
+        return type(value)(_copied(v) for v in value)
+    return value.copy() if isinstance(value, np.ndarray) else value
+
+
 def _host(solver) -> dict:
     """{holder: {name: value}}: the plain host values a checkpoint holds."""
-    return {holder: {name: value for name, value in vars(obj).items() if _plain(value)}
+    return {holder: {name: _copied(value) for name, value in vars(obj).items() if _plain(value)}
             for holder, obj in (("solver", solver), ("neighbours", solver.neighbours))}
 
 
@@ -86,9 +112,95 @@ def capture(solver) -> dict:
     return {"arrays": arrays, "host": _host(solver)}
 
 
+def layout(target: wp.array) -> tuple:
+    """(shape, numpy dtype) of ``target``'s host copy: a vector's or matrix's components a last axis."""
+    dtype = target.dtype
+    if hasattr(dtype, "numpy_dtype"):  # a struct
+        return target.shape, np.dtype(dtype.numpy_dtype())
+    if hasattr(dtype, "_wp_scalar_type_"):  # a vector, matrix or quaternion
+        return target.shape + tuple(dtype._shape_), np.dtype(wp.dtype_to_numpy(dtype._wp_scalar_type_))
+    return target.shape, np.dtype(wp.dtype_to_numpy(dtype))
+
+
+def _floats(data: np.ndarray):
+    """The floating-point fields of ``data`` (a struct array's too), each as an array."""
+    if data.dtype.names:
+        for name in data.dtype.names:
+            yield from _floats(data[name])
+    elif data.dtype.kind == "f":
+        yield data
+
+
+def _permutation(a, n: int) -> bool:
+    return a.shape == (n,) and np.array_equal(np.sort(a), np.arange(n))
+
+
+def _indices(solver, arrays: dict) -> str:
+    """What in ``arrays`` would index past another array, or ""."""
+    n = solver.n
+    bodies = max(1, len(solver.config.motions or []))
+    if not _permutation(arrays["solver.ids"], n):
+        return f"solver.ids is not an order of this solver's {n} particles"
+    order = arrays["neighbours._order"]  # the cell sort's buffers, twice n long
+    if order.min(initial=0) < 0 or order.max(initial=0) >= n:
+        return f"neighbours._order holds indices outside [0, {n - 1}]"
+    if not np.isin(arrays["solver.ptype"], KINDS).all():
+        return f"solver.ptype holds kinds other than {', '.join(map(str, KINDS))}"
+    body = arrays["solver.body"]
+    if body.min(initial=-1) < -1 or body.max(initial=-1) >= bodies:
+        return f"solver.body lies outside [-1, {bodies - 1}]"
+    for path in ("neighbours._start", "neighbours._end"):
+        if arrays[path].min(initial=0) < 0 or arrays[path].max(initial=0) > n:
+            return f"{path} lies outside [0, {n}]"
+    return ""
+
+
+def _values(solver, arrays: dict, host: dict) -> str:
+    """What in ``arrays`` no run of this solver holds, or "": a particle's h other than a level's
+    (all zero, the clock stood still), a particle's mass or density not above 0, a clock other than the
+    state's time or not a time (only its target may be infinite)."""
+    hsml = arrays["solver.hsml"]
+    if not np.isin(hsml, np.asarray(solver._level_h, dtype=hsml.dtype)).all():
+        return "solver.hsml holds an h that is none of this solver's levels'"
+    held = arrays["solver.ptype"] != VACANT  # a refinement level's reserved slots hold nothing yet
+    for path in ("solver.mass", "solver.rho"):
+        if not (arrays[path][held] > 0).all():
+            return f"{path} holds a value that is not above 0 for a particle"
+    clock = arrays["solver._clock"]
+    if not (np.isfinite(clock[:TARGET]).all() and (clock[[T, DT, DT_STABLE]] >= 0.0).all()):
+        return "solver._clock holds a time or step that is not finite and at least 0"
+    if clock[T] != host["solver"]["time"]:
+        return f"solver._clock's time {clock[T]!r} s is not the state's time"
+    return ""
+
+
+def _carried(holder: str, name: str, value, live) -> bool:
+    """Whether ``value`` from a state may stand for the live run's carried host value ``live``."""
+    if isinstance(live, float):
+        return isinstance(value, float) and math.isfinite(value) and value >= 0.0
+    if isinstance(live, int):
+        return type(value) is int and value >= (1 if name == "max_neighbours" else 0)
+    if isinstance(live, np.ndarray):
+        return (isinstance(value, np.ndarray) and value.shape == live.shape and value.dtype == live.dtype
+                and not np.isnan(value).any())
+    if isinstance(live, tuple):
+        return (isinstance(value, tuple) and len(value) == len(live)
+                and all(_carried(holder, name, v, w) for v, w in zip(value, live)))
+    return live is None
+
+
+def _equal(a, b) -> bool:
+    if isinstance(a, (tuple, list)):
+        return type(a) is type(b) and len(a) == len(b) and all(_equal(x, y) for x, y in zip(a, b))
+    if isinstance(a, (np.ndarray, np.generic)):
+        return isinstance(b, (np.ndarray, np.generic)) and a.dtype == b.dtype and np.array_equal(a, b)
+    return type(a) is type(b) and a == b
+
+
 def mismatch(solver, state) -> str:
-    """What in ``state`` does not fit ``solver`` (its arrays' names and shapes, the lists' length,
-    the host values' names and types), or ""."""
+    """What in ``state`` does not fit ``solver``, or "": its arrays' names, shapes, dtypes and the
+    values that index (``_indices``), NaN anywhere, the lists' width and entries, and its host
+    values (CARRIED in kind and range, the others equal to the live solver's)."""
     if not (isinstance(state, dict) and isinstance(state.get("arrays"), dict) and isinstance(state.get("host"), dict)):
         return "it holds no arrays and host values"
     arrays = _stored(solver)
@@ -96,26 +208,56 @@ def mismatch(solver, state) -> str:
         return "its arrays are not this solver's: " + ", ".join(sorted((set(arrays) | {LISTS}) ^ set(state["arrays"])))
     for path, target in arrays.items():
         data = state["arrays"][path]
-        if not isinstance(data, np.ndarray) or data.shape[:target.ndim] != target.shape:  # (n,) of vectors: (n, 3)
-            return f"{path} has shape {getattr(data, 'shape', None)}, this solver's {target.shape}"
+        shape, dtype = layout(target)
+        if not isinstance(data, np.ndarray) or data.shape != shape:
+            return f"{path} has shape {getattr(data, 'shape', None)}, this solver's {shape}"
+        if data.dtype != dtype:
+            return f"{path} holds {data.dtype}, this solver's {dtype}"
+        if any(np.isnan(f).any() or (path != "solver._clock" and np.isinf(f).any()) for f in _floats(data)):
+            return f"{path} holds a value that is not finite"
+    problem = _indices(solver, state["arrays"])
+    if problem:
+        return problem
     nl, count, width = solver.neighbours, state["arrays"]["neighbours.count"], _width(state)
     if width is None:
         return "it holds no width of its neighbour lists (neighbours.max_neighbours)"
+    widest = solver._widest if solver._measured_width else nl.max_neighbours
+    if width > widest:
+        return f"its neighbour lists are {width} wide, more than this solver's {widest}"
     if count.min(initial=0) < 0 or count.max(initial=0) > width:
         return f"neighbours.count lies outside [0, {width}]"
     lists, used = state["arrays"][LISTS], int(count.sum())
-    if not isinstance(lists, np.ndarray) or lists.shape != (used,) or not 0 <= lists.min(initial=0) <= lists.max(
-            initial=0) < nl.n:
+    if not (isinstance(lists, np.ndarray) and lists.dtype == np.int32 and lists.shape == (used,)
+            and 0 <= lists.min(initial=0) <= lists.max(initial=0) < nl.n):
         return f"{LISTS} is not {used} indices of this solver's {nl.n} particles"
     for holder, values in _host(solver).items():
         given = state["host"].get(holder)
         if not isinstance(given, dict) or set(given) != set(values):
             return f"its {holder} values are not this solver's"
-        wrong = [name for name, value in values.items()  # None stands for a value not yet known
-                 if value is not None and given[name] is not None and type(given[name]) is not type(value)]
-        if wrong:
-            return f"its {holder} values {', '.join(wrong)} are not of this solver's types"
-    return ""
+        for name, live in values.items():
+            if name in CARRIED[holder]:
+                if not _carried(holder, name, given[name], live):
+                    return f"its {holder} value {name} is not a value this solver can carry on from"
+            elif not _equal(live, given[name]):
+                return f"its {holder} value {name} differs from this solver's: the state is of another run"
+    return _values(solver, state["arrays"], state["host"])
+
+
+def _value_bytes(a: np.ndarray) -> bytes:
+    """``a``'s values as bytes: a struct array's field by field, as its padding holds no value (and
+    Warp leaves it arbitrary in a host copy)."""
+    if a.dtype.names:
+        return b"".join(_value_bytes(a[name]) for name in a.dtype.names)
+    return np.ascontiguousarray(a).tobytes()
+
+
+def fingerprint(state: dict) -> dict:
+    """{field: a digest of its values} of ``state`` (``capture``): two states hold the same values,
+    bit for bit, where their fingerprints are equal."""
+    out = {path: hashlib.sha256(_value_bytes(a)).hexdigest() for path, a in state["arrays"].items()}
+    for holder, values in state["host"].items():
+        out.update({f"{holder}.{name}": repr(v) for name, v in values.items()})
+    return out
 
 
 def restore(solver, state: dict):
@@ -129,13 +271,15 @@ def restore(solver, state: dict):
 
 def put(solver, state: dict):
     """Put ``state`` into ``solver``, which ``mismatch`` has found it fits; its lists as wide as
-    they were."""
+    they were. Every array is built on the device before the first is copied in."""
     nl = solver.neighbours
     width = _width(state)
+    staged = {path: wp.array(state["arrays"][path], dtype=target.dtype, device=target.device)
+              for path, target in _stored(solver).items()}
     if width != nl.max_neighbours:
         solver.resize_lists(width)
     for path, target in _stored(solver).items():
-        wp.copy(target, wp.array(state["arrays"][path], dtype=target.dtype, device=target.device))
+        wp.copy(target, staged[path])
     lists = np.array(nl.nbr.numpy())
     lists[_used(width, state["arrays"]["neighbours.count"])] = state["arrays"][LISTS]
     nl.nbr.assign(lists)

@@ -571,8 +571,9 @@ class Solver:
         fail = self._fail.numpy()
         self.time, self.dt, self.dt_stable = float(clock[T]), float(clock[DT]), float(clock[DT_STABLE])
         self.steps = int(steps[STEP])
-        self._excluded_host = (self._excluded.numpy(), self._excluded_mass.numpy())
-        self._census_host = self._energy_sum.numpy()
+        # copies: on a CPU numpy() is a view of the device's memory, which the next steps write
+        self._excluded_host = (self._excluded.numpy().copy(), self._excluded_mass.numpy().copy())
+        self._census_host = self._energy_sum.numpy().copy()
         longest = self.neighbours.longest() if fail[health.NEIGHBOUR_OVERFLOW] != health.NO_FAILURE else 0
         if longest and self._measured_width and longest <= self._widest:
             self.resize_lists(min(measured_width(longest), self._widest))
