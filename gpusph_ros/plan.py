@@ -27,7 +27,7 @@ import warp as wp
 import yaml
 
 from .scenes import reduce, resources
-from .scenes.build import build_run, fluid_boxes, scene_config
+from .scenes.build import build_run, priced
 from .scenes.schema import parse_scene
 from .sph import ConfigError
 
@@ -70,13 +70,10 @@ def estimate(scene, run_config) -> dict:
     whether that memory is free on the device ("fits": True, False, or None where the device is not
     on this machine; "limit": why not), and the fewest steps to the end time (dt <= cfl h / c0, the
     sound-speed condition alone) with the particle-steps they cost. Nothing is built or allocated."""
-    cfg = run_config.solver
-    reduced = reduce.apply(scene, run_config.reduction, run_config.output.end_time, cfg.dx, cfg.hdx)
+    reduced, cfg, n = priced(scene, run_config)
     if reduced.refine:
         raise ValueError("refine: an estimate prices a scene without zones (their particles are known only as "
                          "they are split); plan it without --estimate, or without its zones")
-    cfg = scene_config(reduced, cfg)
-    n = resources.particle_bound(reduced, cfg, fluid_boxes(reduced))
     here, free_dev = True, None
     if cfg.device != "cpu":
         try:

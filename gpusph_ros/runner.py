@@ -26,7 +26,7 @@ from .drive import BodyDriver, WrenchHold
 from .measure import cloud
 from .measure.suite import Measurements
 from .output import frames, markers, messages, state_file
-from .scenes.build import build_run
+from .scenes.build import build_run, priced
 from .scenes.settings import check_output
 from .sph import ConfigError, bodies, checkpoint
 from .sph.config import shown
@@ -357,6 +357,10 @@ class Run:
 CHECKPOINT_FILE = "checkpoint.npz"
 # what versions before the data-only state file wrote: recognised, never loaded (state_file)
 PICKLED_CHECKPOINT = "checkpoint.pkl"
+# a resumed run's settings may build at most this many times its state's particles (and this many
+# more) before the build is refused: the scene's price (scenes.build.priced) is exact for walls with a
+# volume, an overestimate by the wall's edges otherwise, and leaves out what zones add
+RESUME_PRICE_RATIO, RESUME_PRICE_SLACK = 4, 10_000
 
 
 class Checkpoints:
@@ -411,7 +415,14 @@ def resume(folder):
         state = state_file.read(path, "checkpoint", ("invocation", "run", "recording"))
         invocation, recording = state["invocation"], state["recording"]
         scene = load_scene(invocation["scene"])
-        run = Run(scene, resolve(scene, files=invocation["run_config"], sets=invocation["sets"]))
+        config = resolve(scene, files=invocation["run_config"], sets=invocation["sets"])
+        held = state["run"]["solver"]["host"]["solver"]["n"]
+        at_most = priced(scene, config)[2]
+        # a checkpoint whose settings say dx = 0.2 mm built 6.9 M particles before its arrays were refused
+        if type(held) is not int or held < 1 or at_most > RESUME_PRICE_RATIO * held + RESUME_PRICE_SLACK:
+            raise ValueError(f"its settings build up to {at_most:,} particles and its state holds {shown(held)}: "
+                             "they are not the settings it was taken with")
+        run = Run(scene, config)
         run.restore(state["run"])
         counted_file, counted = recording["file"], recording["messages"]
         if not isinstance(counted_file, str) or type(counted) is not int or counted < 1:

@@ -23,7 +23,7 @@ from gpusph_ros.scenes.settings import resolve
 pytestmark = pytest.mark.ros
 
 REPO = Path(__file__).resolve().parents[1]
-SETS = ["dx=0.004", "end_time=0.3", "particle_rate=50"]  # collapse_2d: 927 particles, about 1,650 steps
+SETS = ["dx=0.004", "end_time=0.3", "particle_rate=50"]  # collapse_2d: 1,059 particles, about 1,650 steps
 
 
 def _same_recordings(a, b):
@@ -242,3 +242,19 @@ def test_a_checkpoint_with_edited_numbers_is_refused_and_the_folder_left_as_it_w
     state_file.write(path, "checkpoint", good)
     run, recorder, _ = resume(folder)  # the checkpoint as written still resumes
     recorder.close({"status": "stopped"})
+
+
+def test_a_checkpoint_whose_settings_build_far_more_particles_is_refused_before_the_build(tmp_path):
+    # its settings at dx = 0.2 mm built 6.9 M particles (4 GB, 19 s) before its arrays were refused
+    from gpusph_ros.output import state_file
+
+    folder = tmp_path / "fine"
+    _stopped_run(folder)
+    path = folder / CHECKPOINT_FILE
+    state = state_file.read(path, "checkpoint")
+    state["invocation"]["sets"] = [s if not s.startswith("dx=") else "dx=0.0002" for s in SETS]
+    state_file.write(path, "checkpoint", state)
+    start = time.perf_counter()
+    with pytest.raises(ValueError, match=r"its settings build up to [\d,]+ particles and its state holds \d+"):
+        resume(folder)
+    assert time.perf_counter() - start < 10.0

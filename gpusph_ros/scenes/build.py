@@ -100,6 +100,15 @@ def build_run(scene: Scene, run_config) -> Model:
     return build_from(reduced, cfg)
 
 
+def priced(scene: Scene, run_config) -> tuple:
+    """(the reduced scene, its configuration, the particles its build makes at most without its
+    zones) under ``run_config``: what a run costs, from the scene alone, nothing built."""
+    cfg = run_config.solver
+    reduced = reduce.apply(scene, run_config.reduction, run_config.output.end_time, cfg.dx, cfg.hdx)
+    cfg = scene_config(reduced, cfg)
+    return reduced, cfg, resources.particle_bound(reduced, cfg, fluid_boxes(reduced))
+
+
 def build(scene: Scene, **numerics) -> Model:
     """The model of ``scene`` with the given numerics (``SolverConfig`` fields: dx, kernel, ...)."""
     return build_from(scene, SolverConfig(**numerics))
