@@ -9,7 +9,7 @@ The cases run in a child process, which names each case before it tries it: if t
 
     python bench/state_fuzz.py [--minutes 10] [--seed 1]
 
-tests/test_state_fuzz.py runs a short round in the suite.
+tests/test_state_fuzz.py runs a 15-second round in the suite.
 """
 import argparse
 import json

@@ -28,8 +28,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ..sph.config import shown
-
 FORMAT = "gpusph_ros state"
 VERSION = 2  # 1: the pickle of earlier versions, never read
 HEADER = "header.npy"
@@ -84,6 +82,14 @@ def _decode(value, arrays):
         if tag == PAIRS:
             return {k: _decode(v, arrays) for k, v in inner}
     return {k: _decode(v, arrays) for k, v in value.items()}
+
+
+def _named(value) -> str:
+    """A value from a file as a reply may name it: a number or a short text as it is, anything else
+    by its type alone (a file's 1 MB "version" was quoted whole)."""
+    if isinstance(value, (int, float)) or (isinstance(value, str) and len(value) <= 40):
+        return repr(value)
+    return f"a {type(value).__name__}" + (f" of {len(value):,} characters" if isinstance(value, str) else "")
 
 
 def _regular(path: Path, what: str):
@@ -180,14 +186,14 @@ def _read_zip(z: zipfile.ZipFile, kind: str) -> dict:
     if not isinstance(header, dict) or header.get("format") != FORMAT:
         raise StateFileError("it is an .npz but not a gpusph_ros state file")
     if header.get("version") != VERSION:
-        raise StateFileError(f"it is of format version {shown(header.get('version'))}; this version reads {VERSION}")
+        raise StateFileError(f"it is of format version {_named(header.get('version'))}; this version reads {VERSION}")
     if header.get("kind") != kind:
-        raise StateFileError(f"it is a {shown(header.get('kind'))}, not a {kind!r}")
+        raise StateFileError(f"it is a {_named(header.get('kind'))}, not a {kind!r}")
     read_once = set()
 
     def array(k):
         if not isinstance(k, int) or isinstance(k, bool):
-            raise StateFileError(f"an array reference {shown(k)} is not a number")
+            raise StateFileError(f"an array reference {_named(k)} is not a number")
         if k in read_once:
             raise StateFileError(f"it names member a{k}.npy twice; a state file names each array once")
         read_once.add(k)
