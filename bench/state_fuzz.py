@@ -1,5 +1,6 @@
 """Edited state files against a live solver: each array and host value of a real state mutated in
-turn (scaled, negated, NaN, infinite, another dtype, another shape, indices out of range, text),
+turn (scaled, negated, NaN, infinite, another dtype, another shape, indices out of range, text, one
+element anywhere set to an extreme, drawn afresh on each pass),
 written to a state file, read back and restored. The process must never die, a refused state
 must leave the run as it was, bit for bit, and an accepted one must run (a health check, or the
 lists' overflow of clumped particles, may stop it; nothing else may).
@@ -42,6 +43,12 @@ def mutations(value, rng):
                     ("inf", value + np.inf), ("other float", value.astype(np.float32 if value.dtype == np.float64
                                                                              else np.float64)),
                     ("complex", value.astype(np.complex128))]
+        if value.dtype.kind in "fiu" and value.size:  # one element, anywhere, set to an extreme
+            one = value.copy()
+            extremes = [-2 ** 31, -1, 0, 1, len(value), 2 ** 31 - 1] + (
+                [np.nan, np.inf, -np.inf, 1e30, -1e30, 1e-30] if value.dtype.kind == "f" else [])
+            one.flat[rng.integers(one.size)] = extremes[rng.integers(len(extremes))]
+            out.append(("one element", one))
         if value.dtype.kind in "iu":
             big = np.iinfo(np.int32).max
             out += [("x100", value * 100), ("negated", -value), ("+n", value + len(value)), ("max", value * 0 + big),
