@@ -33,8 +33,10 @@ QUATERNION_TOLERANCE = 1.0e-3
 
 
 def _limit(v: np.ndarray, largest: float) -> np.ndarray:
-    """v, shortened to at most ``largest`` long."""
-    norm = float(np.linalg.norm(v))
+    """v, shortened to at most ``largest`` long. Its length is taken over its largest component: a
+    twist of 1e154 m/s on each axis overflowed the plain norm to inf, and became no velocity."""
+    top = float(np.max(np.abs(v), initial=0.0))
+    norm = top * float(np.linalg.norm(v / top)) if top > 0.0 else 0.0
     return v * (largest / norm) if norm > largest else v
 
 

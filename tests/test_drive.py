@@ -103,6 +103,15 @@ def test_a_twist_is_clamped_and_silence_brings_the_body_to_rest():
     assert rows[-1][2] == pytest.approx([0.0, 0.0, 0.0])
 
 
+def test_a_twist_too_large_for_its_norm_is_clamped_along_its_direction():
+    # 1e154 m/s on two axes overflowed the norm to inf and became no velocity, "clamped" all the same
+    driver = paddle()
+    taken, note = driver.command("twist", 0.0, 0.0, [1e154, 1e154, 0.0], [0.0, 0.0, 0.0])
+    assert taken and "clamped to max_speed 0.5" in note
+    accel = driver.segment(0.0, DT, at_rest())["acceleration"]
+    assert accel[0] == pytest.approx(accel[1]) and accel[0] > 0.0 and accel[2] == 0.0
+
+
 def test_the_rotation_vector_is_the_shorter_way():
     q = np.array([0.0, 0.0, math.sin(-0.3), math.cos(-0.3)])
     assert rotation_vector(q, np.array([0.0, 0.0, 0.0, 1.0])) == pytest.approx([0.0, 0.0, -0.6])
