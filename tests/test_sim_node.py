@@ -530,7 +530,8 @@ def test_a_paddle_driven_by_cmd_pose_follows_makes_waves_and_refuses_bad_command
     every output (20 Hz); the pose follows the command one or two outputs behind (the best lag of
     0-0.3 s, 0.05 s apart, is at most 0.1 s: the driver's one output and the command's trip), within
     2 mm RMS there; the gauge 1 m down the flume sees waves. Then a NaN pose, one stamped 10 s ahead,
-    one 3 s old and a non-unit quaternion are refused (counted on /diagnostics), and a 1 m jump is
+    one 3 s old, a non-unit quaternion and one in another frame than the world's are refused (counted
+    on /diagnostics), and a 1 m jump is
     walked at no more than max_speed (0.5 m/s), the node alive and no particle lost."""
     import math
     import threading
@@ -548,10 +549,10 @@ def test_a_paddle_driven_by_cmd_pose_follows_makes_waves_and_refuses_bad_command
         client.clear(topic)
     publisher = client.node.create_publisher(PoseStamped, "/sim_node/bodies/paddle/cmd_pose", 10)
 
-    def command(x, t, q=(0.0, 0.0, 0.0, 1.0)):
+    def command(x, t, q=(0.0, 0.0, 0.0, 1.0), frame="world"):
         msg = PoseStamped()
         msg.header.stamp.sec, msg.header.stamp.nanosec = int(t), int(round((t - int(t)) * 1e9))
-        msg.header.frame_id = "world"
+        msg.header.frame_id = frame
         msg.pose.position.x, msg.pose.position.z = x, 0.4
         msg.pose.orientation.x, msg.pose.orientation.y, msg.pose.orientation.z, msg.pose.orientation.w = q
         publisher.publish(msg)
@@ -601,6 +602,9 @@ def test_a_paddle_driven_by_cmd_pose_follows_makes_waves_and_refuses_bad_command
     command(0.07, now, q=(0.0, 0.0, 0.0, 2.0))
     status = _diagnostic(client, lambda s: int(s.get("commands_refused_paddle", 0)) >= 3)
     assert status["level"] != DiagnosticStatus.ERROR
+    refused = int(status["commands_refused_paddle"])
+    command(0.07, sim_now(), frame="base_link")  # a pose in the robot's frame was taken as the world's
+    _diagnostic(client, lambda s: int(s.get("commands_refused_paddle", 0)) > refused)
     client.clear(pose_topic)
     jump_from = sim_now()
     command(1.07, jump_from)

@@ -300,14 +300,14 @@ class SimNode(LifecycleNode):
                 return
             dim = run.model.config.dim
             stamp = run.stamp_time(msg.header.stamp.sec + msg.header.stamp.nanosec * 1.0e-9)
+            if msg.header.frame_id not in ("", run.frame_id):  # a pose in base_link was taken as the world's
+                self._count(body, kind, False, f"{kind}: frame {shown(msg.header.frame_id)}; expected the world "
+                                               f"frame {run.frame_id!r} (or none)")
+                return
             if kind == "wrench":
                 f, m = msg.wrench.force, msg.wrench.torque
-                if msg.header.frame_id not in ("", run.frame_id):
-                    taken, why = False, (f"wrench: frame {msg.header.frame_id!r}; expected the world frame "
-                                         f"{run.frame_id!r} (or none)")
-                else:
-                    taken, why = run.push(body, stamp, frames.scene_vector(dim, (f.x, f.y, f.z)),
-                                          frames.scene_vector(dim, (m.x, m.y, m.z), axial=True))
+                taken, why = run.push(body, stamp, frames.scene_vector(dim, (f.x, f.y, f.z)),
+                                      frames.scene_vector(dim, (m.x, m.y, m.z), axial=True))
                 self._count(body, kind, taken, why)
                 return
             if kind == "pose":
