@@ -54,6 +54,11 @@ def revision() -> str:
     return out.stdout.strip() if out.returncode == 0 else "unknown (not a git checkout)"
 
 
+def outputs_by(t: float, rate: float) -> int:
+    """The outputs at or before simulated time ``t`` at ``rate`` [Hz], the first at t = 0 (to rounding)."""
+    return int(np.floor(t * rate + 1e-9)) + 1
+
+
 class Run:
     """One run of ``scene`` under ``run_config`` (``scenes.settings.resolve``)."""
 
@@ -105,7 +110,7 @@ class Run:
 
     @property
     def n_outputs(self) -> int:
-        return int(np.floor(self.output.end_time * self.output.output_rate + 1e-9)) + 1
+        return outputs_by(self.output.end_time, self.output.output_rate)
 
     def _packer(self, fields) -> cloud.CloudPacker:
         return cloud.CloudPacker(self.solver, fields, turn=frames.turn(self.model.config.dim))
@@ -121,7 +126,7 @@ class Run:
         rate = self.output.output_rate
         self.output = dataclasses.replace(self.output, **changes)
         if self.output.output_rate != rate and self.next_output > 0:
-            self.next_output = int(np.floor(self.solver.time * self.output.output_rate + 1e-9)) + 1
+            self.next_output = outputs_by(self.solver.time, self.output.output_rate)
 
     def set_cloud(self, fields=None, frame_id=None):
         """Change the particle cloud's fields or the frame of every message."""
@@ -213,7 +218,7 @@ class Run:
             raise ValueError(f"checkpoint: its output settings: {err}") from None
         next_output, wall, origin = state.get("next_output"), state.get("wall"), state.get("time_origin_ns")
         t = state["solver"]["host"]["solver"]["time"]
-        passed = int(np.floor(t * output.output_rate + 1e-9)) + 1  # outputs at or before t
+        passed = outputs_by(t, output.output_rate)
         if type(next_output) is not int or next_output not in (passed - 1, passed):
             raise ValueError(f"checkpoint: its next output {shown(next_output)} is not the next after t = {t:.6g} s "
                              f"at {output.output_rate:g} Hz ({passed - 1} or {passed})")
@@ -398,7 +403,7 @@ def resume(folder):
     ``.superseded``, and a new file ``<name>_<k>.mcap`` opened after them. ValueError, before
     anything in the folder changes, when there is nothing to resume or when the bag no longer holds
     every message the checkpoint counts (the resumed recording would have a gap)."""
-    from .output.recording import bag_files, file_entries, is_whole, messages_before, repair, whole_messages
+    from .output.recording import bag_files, file_entries, is_whole, repair, whole_messages
     from .scenes.schema import load_scene
     from .scenes.settings import resolve
 
@@ -443,11 +448,8 @@ def resume(folder):
                              "messages, and a resumed run would leave a gap in it; gpusph-analyze --repair mends "
                              "the bag's last file only, so the run cannot be resumed")
     whole = is_whole(files[k])
-    if whole:  # its summary counts its messages: no need to read them all
-        entry = file_entries(folder, k + 1)[-1]
-        held, last = entry["count"], entry["last"]
-    else:
-        held, last = whole_messages(files[k])
+    # one pass over the file: its whole messages, the last one's time and those from before the checkpoint
+    held, last, before = whole_messages(files[k], run.time_origin_ns + int(round(run.solver.time * 1e9)))
     last_t = ((last or run.time_origin_ns) - run.time_origin_ns) * 1e-9
     if held < counted:
         raise ValueError(
@@ -455,7 +457,6 @@ def resume(folder):
             f"its checkpoint counts, at t = {run.solver.time:.4f} s: the file was cut after the checkpoint was "
             "written, and a resumed run would leave a gap in the recording. The run cannot be resumed from this "
             "checkpoint; gpusph-analyze --repair makes what the bag holds readable")
-    before = messages_before(files[k], run.time_origin_ns + int(round(run.solver.time * 1e9)))
     if counted < before:
         raise ValueError(f"--resume: its checkpoint counts {counted:,} messages of {files[k].name}, which holds "
                          f"{before:,} from before the checkpoint's t = {run.solver.time:.4f} s: cutting the file back "

@@ -305,20 +305,16 @@ def _records(f):
         return
 
 
-def whole_messages(file) -> tuple:
-    """(messages, the last one's log time [ns] or None) that an MCAP file holds whole, cut or not."""
-    count, last = 0, None
+def whole_messages(file, before: int = None) -> tuple:
+    """(messages, the last one's log time [ns] or None, those logged before ``before`` [ns]) that an
+    MCAP file holds whole, cut or not."""
+    count, last, earlier = 0, None, 0
     with open(file, "rb") as f:
         for record in _records(f):
             if isinstance(record, Message):
                 count, last = count + 1, record.log_time if last is None else max(last, record.log_time)
-    return count, last
-
-
-def messages_before(file, log_time: int) -> int:
-    """The whole messages of an MCAP file, cut or not, logged before ``log_time`` [ns]."""
-    with open(file, "rb") as f:
-        return sum(isinstance(r, Message) and r.log_time < log_time for r in _records(f))
+                earlier += before is not None and record.log_time < before
+    return count, last, earlier
 
 
 def repair(path, compression: str = "zstd", keep: int = None) -> dict:

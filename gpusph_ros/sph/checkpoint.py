@@ -122,12 +122,13 @@ def layout(target: wp.array) -> tuple:
     return target.shape, np.dtype(wp.dtype_to_numpy(dtype))
 
 
-def _floats(data: np.ndarray):
-    """The floating-point fields of ``data`` (a struct array's too), each as an array."""
+def _fields(data: np.ndarray):
+    """``data`` itself, or a struct array's fields, each as an array of its own (a struct's padding
+    holds no value, and Warp leaves it arbitrary in a host copy)."""
     if data.dtype.names:
         for name in data.dtype.names:
-            yield from _floats(data[name])
-    elif data.dtype.kind == "f":
+            yield from _fields(data[name])
+    else:
         yield data
 
 
@@ -174,7 +175,7 @@ def _values(solver, arrays: dict, host: dict) -> str:
     return ""
 
 
-def _carried(holder: str, name: str, value, live) -> bool:
+def _carried(name: str, value, live) -> bool:
     """Whether ``value`` from a state may stand for the live run's carried host value ``live``."""
     if isinstance(live, float):
         return isinstance(value, float) and math.isfinite(value) and value >= 0.0
@@ -185,7 +186,7 @@ def _carried(holder: str, name: str, value, live) -> bool:
                 and not np.isnan(value).any())
     if isinstance(live, tuple):
         return (isinstance(value, tuple) and len(value) == len(live)
-                and all(_carried(holder, name, v, w) for v, w in zip(value, live)))
+                and all(_carried(name, v, w) for v, w in zip(value, live)))
     return live is None
 
 
@@ -213,7 +214,8 @@ def mismatch(solver, state) -> str:
             return f"{path} has shape {getattr(data, 'shape', None)}, this solver's {shape}"
         if data.dtype != dtype:
             return f"{path} holds {data.dtype}, this solver's {dtype}"
-        if any(np.isnan(f).any() or (path != "solver._clock" and np.isinf(f).any()) for f in _floats(data)):
+        if any(f.dtype.kind == "f" and (np.isnan(f).any() or (path != "solver._clock" and np.isinf(f).any()))
+               for f in _fields(data)):
             return f"{path} holds a value that is not finite"
     problem = _indices(solver, state["arrays"])
     if problem:
@@ -236,25 +238,18 @@ def mismatch(solver, state) -> str:
             return f"its {holder} values are not this solver's"
         for name, live in values.items():
             if name in CARRIED[holder]:
-                if not _carried(holder, name, given[name], live):
+                if not _carried(name, given[name], live):
                     return f"its {holder} value {name} is not a value this solver can carry on from"
             elif not _equal(live, given[name]):
                 return f"its {holder} value {name} differs from this solver's: the state is of another run"
     return _values(solver, state["arrays"], state["host"])
 
 
-def _value_bytes(a: np.ndarray) -> bytes:
-    """``a``'s values as bytes: a struct array's field by field, as its padding holds no value (and
-    Warp leaves it arbitrary in a host copy)."""
-    if a.dtype.names:
-        return b"".join(_value_bytes(a[name]) for name in a.dtype.names)
-    return np.ascontiguousarray(a).tobytes()
-
-
 def fingerprint(state: dict) -> dict:
     """{field: a digest of its values} of ``state`` (``capture``): two states hold the same values,
     bit for bit, where their fingerprints are equal."""
-    out = {path: hashlib.sha256(_value_bytes(a)).hexdigest() for path, a in state["arrays"].items()}
+    out = {path: hashlib.sha256(b"".join(np.ascontiguousarray(f).tobytes() for f in _fields(a))).hexdigest()
+           for path, a in state["arrays"].items()}
     for holder, values in state["host"].items():
         out.update({f"{holder}.{name}": repr(v) for name, v in values.items()})
     return out

@@ -202,11 +202,9 @@ class Solver:
             # the floating bodies' state, half step and candidate, and the last evaluation's force
             # and torque on each
             self._rigid, self._rigid_h, self._rigid_c = (B.rigid_states(cfg.motions, dev) for _ in range(3))
-            # force and torque of body b at 2 b and 2 b + 1, summed in a fixed order (sums.py), as is the
-            # bodies' work on the fluid
+            # force and torque of body b at 2 b and 2 b + 1, summed in a fixed order (sums.py)
             self._body_sums = wp.zeros(2 * nb, dtype=wp.vec3d, device=dev)
             self._wrench_part = sums.Partials(n, 2 * nb, wp.vec3d, dev)
-            self._work_part = sums.Partials(n, 1, wp.float64, dev)
             self._gravity64 = wp.vec3d(*cfg.gravity)
             self._walls64 = (wp.vec3d(*cfg.wall_lo), wp.vec3d(*cfg.wall_hi))
             # the fixed obstacles' boxes a floating body meets (in float64, as its state), and whether
@@ -239,7 +237,8 @@ class Solver:
         self._fail = arr(np.full(health.N_CHECKS, health.NO_FAILURE, dtype=np.int32), wp.int32)
         # the census sums (health.CENSUS_START); clumped fluid particles and the first of them
         self._energy_sum = arr(np.array(health.CENSUS_START), wp.float64)
-        self._energy_part = sums.Partials(n, 1, wp.float64, dev)
+        # one float64 sum at a time in a fixed order (sums.py): the census's energies, the bodies' work
+        self._sum64 = sums.Partials(n, 1, wp.float64, dev)
         self._clumped = wp.zeros(n, dtype=wp.int32, device=dev)
         self._clump_count = arr(np.array([0, health.NO_FAILURE], dtype=np.int32), wp.int32)
         # exclusions (health.py): fluid particles at fault in the candidate, their count by reason and
@@ -362,7 +361,7 @@ class Solver:
         """The moving bodies' work on the fluid over the step (bodies.work_on_fluid), from the rates
         just evaluated at its midpoint over every level."""
         if self._moving:
-            part = self._work_part
+            part = self._sum64
             self.launch(bodies.build(self.scalar).work_on_fluid, part.count,
                         [self._laws, self._clock, self.params.coarse_stride, self.ptype, self.body, self.mass, self.acc,
                          self._vel_h, *part.args()])
@@ -445,7 +444,7 @@ class Solver:
     def _census(self):
         """The fluid's energy and clumping, checked against the run's limits (health.census), the
         energy summed in a fixed order (sums.py)."""
-        p, k, part = self.params, self._passes, self._energy_part
+        p, k, part = self.params, self._passes, self._sum64
         wp.launch(k.census, dim=part.count, inputs=[p, self._pos_c, self._vel_c, self._rho_c, self.mass, self.ptype,
                                                     self.ids, self._clumped, self._faulty, self.solid_lo,
                                                     self.solid_hi, self._energy_sum, self._clump_count,

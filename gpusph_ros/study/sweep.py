@@ -58,8 +58,9 @@ def sweep(study, scheduler=None, client=None, progress=print) -> list:
         progress(f"{study.name}: {len(cases)} cases, {len(cases) - len(todo)} already finished, {len(todo)} to run "
                  f"on {workers} worker(s) -> {study.out}")
         futures = {}
+        # on GPUs each worker runs its cases on its own one; else the case's solver takes the device it names
+        task, last = (_on_own_gpu, gpus) if gpus else (run_case, None)  # last: its GPUs, or no device
         for case in todo:
-            task, last = (_on_own_gpu, gpus) if gpus else (run_case, None)
             future = client.submit(task, dataclasses.asdict(case), str(study.out), study.metrics, threads, last,
                                    key=f"{study.name}/{case.name}", pure=False)
             futures[future] = case
