@@ -117,15 +117,15 @@ def plan_reductions(scene, run_config, calibration_steps: int = 30) -> tuple:
     cfg = build_run(scene, run_config).config
     options = reduce.applicable(scene, run_config.output.end_time, cfg.dx)
     plans = [plan(scene, run_config, calibration_steps)]
-    for label, reduction in options["apply"].items():
-        if label != run_config.reduction.label:
-            plans.append(plan(scene, dataclasses.replace(run_config, reduction=reduction), calibration_steps))
     not_applicable = dict(options["not applicable"])
     label, other = zone_option(scene, cfg.dx)
-    try:
-        plans.append({**plan(other, run_config, calibration_steps), "model": label, "refine": other.refine})
-    except (ConfigError, ValueError) as err:  # a proposal the run's numerics cannot refine
-        not_applicable[label] = str(err)
+    others = [(name, scene, dataclasses.replace(run_config, reduction=reduction), {})
+              for name, reduction in options["apply"].items() if name != run_config.reduction.label]
+    for name, chosen, config, extra in others + [(label, other, run_config, {"model": label, "refine": other.refine})]:
+        try:
+            plans.append({**plan(chosen, config, calibration_steps), **extra})
+        except (ConfigError, ValueError) as err:  # a reduction that does not carry the scene's zones, a
+            not_applicable[name] = str(err)       # proposal the run's numerics cannot refine
     return plans, not_applicable
 
 

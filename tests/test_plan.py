@@ -122,3 +122,16 @@ def model_config(**numerics):
     from gpusph_ros.sph import SolverConfig
 
     return SolverConfig(dim=3, **numerics).validate()
+
+
+def test_a_zoned_scene_lists_the_reductions_that_cannot_carry_its_zones(tmp_path):
+    """wall_planes does not carry refinement zones yet: the plan of a zoned scene says so beside the
+    others, where it ended on that reduction's ConfigError (issue 58). The zone stands in the air
+    at rest: it holds no fluid until the surge climbs there."""
+    path = tmp_path / "dry_zone.yaml"
+    path.write_text("base: collapse_2d\nrefine:\n  - {name: dry, lo: [0.2, 0.15], hi: [0.3, 0.2], ratio: 0.5}\n")
+    scene = load_scene(path)
+    plans, not_applicable = plan_reductions(scene, resolve(scene, dx=0.01, end_time=0.05), calibration_steps=3)
+    assert [p["model"] for p in plans] == ["full", "no zones"]
+    assert "refinement zones (refine:) are not carried" in not_applicable["wall_planes"]
+    assert plans[0]["particles"] > plans[1]["particles"] and "not applicable" in table(plans, not_applicable)

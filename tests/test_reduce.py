@@ -184,3 +184,13 @@ def test_no_bore_loses_a_particle_through_its_particle_floor(bores):
     1.2% of its fluid; boundaries/adami.py). Measured with it: none through a wall in any model."""
     for model, (_, _, _, excluded) in bores.items():
         assert excluded["wall_penetration"] == 0, (model, excluded)
+
+
+def test_water_along_the_whole_tank_stands_at_the_obstacle_from_the_start():
+    """With no dam-break front (the water reaches the far wall), the 2D section holds at a probe
+    until a reflection at sqrt(g H) has come back from the obstacle's face; the plan of such a scene
+    ended on max() of nothing (issue 58)."""
+    data = yaml.safe_load(load_scene("dambreak1_lab").text)
+    data.update(fluid=[{"name": "pool", "lo": [0.0, 0.0, 0.0], "hi": [1.6, 0.67, 0.3]}], wet_bed=0.0)
+    until = reduce.valid_until(parse_scene(data))
+    assert until == {"velocity": pytest.approx((0.90 - 0.754) / (9.81 * 0.3) ** 0.5, rel=1e-9)}

@@ -125,7 +125,8 @@ def valid_until(scene: Scene) -> dict:
         return {}
     up = scene.dim - 1
     g, depth = abs(scene.gravity[up]), max(b.hi[up] for b in scene.fluid)
-    front = max(b.hi[0] for b in scene.fluid if b.hi[0] < scene.tank[0])
+    # water that reaches the tank's far end stands at every obstacle already: no front to arrive
+    front = max((b.hi[0] for b in scene.fluid if b.hi[0] < scene.tank[0]), default=scene.tank[0])
     speed, back = _front_speed(scene, g, depth), math.sqrt(g * depth)
     out = {}
     for p in scene.probes:
