@@ -57,7 +57,7 @@ def test_a_fluid_box_that_fills_the_whole_tank_is_legal_and_said(tmp_path):
     path.write_text(yaml.safe_dump(full))
     err = io.StringIO()
     with redirect_stderr(err):
-        run_main([str(path), "--set", "dx=0.05", "--set", "end_time=0.001", "--out", str(tmp_path / "bag"),
+        run_main([str(path), "--set", "dx=0.05", "--set", "output_rate=1000", "--set", "end_time=0.001", "--out", str(tmp_path / "bag"),
                   "--quiet"])
     assert "gpusph-run: warning: fluid box 'water' fills the whole tank" in err.getvalue(), err.getvalue()
 
@@ -160,6 +160,7 @@ def test_run_settings_layer_scene_then_files_then_sets(tmp_path):
     ("colour=red", "colour", "the settings are"),
     ("end_time=-1", "end_time", "a time in [1e-06, 100000] s"),
     ("end_time=1e30", "end_time", "a time in [1e-06, 100000] s"),  # it ran until killed
+    ("end_time=0.001", "end_time", "at least one output interval, 1 / output_rate = 0.01 s"),  # it ran no step
     ("output_rate=5e-324", "output_rate", "a rate in [0.001, 10000] Hz"),  # a denormal was accepted
     ("particle_rate=500", "particle_rate", "output_rate = 100] Hz"),
     ("particle_rate=1e-300", "particle_rate", "0 (no particle clouds) or a rate in [0.001"),

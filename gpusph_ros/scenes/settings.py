@@ -127,6 +127,11 @@ def check_output(output: Output) -> Output:
         raise ConfigError("end_time", output.end_time, f"a time in [{MIN_END_TIME:g}, {MAX_END_TIME:g}] s")
     if not (math.isfinite(output.output_rate) and MIN_OUTPUT_RATE <= output.output_rate <= MAX_OUTPUT_RATE):
         raise ConfigError("output_rate", output.output_rate, f"a rate in [{MIN_OUTPUT_RATE:g}, {MAX_OUTPUT_RATE:g}] Hz")
+    # outputs fall at k / output_rate and a run stops at the last one at or before end_time: a shorter
+    # end_time ran no step and reported "completed: 0 steps, t = 0 s"
+    if output.end_time * output.output_rate < 1.0 - 1.0e-9:
+        raise ConfigError("end_time", output.end_time, f"at least one output interval, 1 / output_rate = "
+                                                       f"{1.0 / output.output_rate:g} s (or a higher output_rate)")
     rate = output.particle_rate
     if not (math.isfinite(rate) and (rate == 0.0 or MIN_OUTPUT_RATE <= rate <= output.output_rate)):
         raise ConfigError("particle_rate", rate, f"0 (no particle clouds) or a rate in [{MIN_OUTPUT_RATE:g}, "
