@@ -28,7 +28,7 @@ setup(
     # what pip installs beside the package: the PyPI-only dependencies and the Python ones that a ROS
     # install has from apt (package.xml names those, and the ROS packages, for rosdep); requirements.txt
     # pins the versions tested
-    install_requires=['setuptools', 'numpy', 'PyYAML', 'warp-lang', 'mcap', 'tqdm'],
+    install_requires=['setuptools', 'numpy', 'PyYAML', 'warp-lang', 'mcap', 'lz4', 'zstandard', 'tqdm'],
     zip_safe=True,
     maintainer='gpusph_ros maintainers',
     maintainer_email='maintainers@gpusph-ros.dev',

@@ -26,8 +26,8 @@ FIELDS = set(SCENE_KEYS) | set(RUN_KEYS) | {"scene", "--set", "--out", "run_conf
 BAD_SETS = ["kernel=gauss", "dx=-1", "dx=1e-6", "dx=2.0e-5", "cfl=1.0e-12", "cfl=2", "dt_fixed=1.0e-12",
             "output_rate=1.0e+9", "output_rate=0", "end_time=-1", "end_time=.inf", "device=tpu", "device=cuda:7",
             "precision=float16", "model=3d", "boundary=glass", "xsph=maybe", "shepard_every=1.5", "no_such=1",
-            "particle_rate=5000", "end_time=0.0001", "viscosity=none", "c0=-3", "max_particles=0", "gravity=[0, 0, -9.81]",
-            "dx", "=0.02", "hdx=[1, 2]", "alpha=.nan", "slab_width=-0.1", "crop=yes please"]
+            "particle_rate=5000", "end_time=0.0001", "viscosity=none", "c0=-3", "max_particles=0",
+            "gravity=[0, 0, -9.81]", "dx", "=0.02", "hdx=[1, 2]", "alpha=.nan", "slab_width=-0.1", "crop=yes please"]
 
 
 def _broken_scene(rng: random.Random):

@@ -6,20 +6,25 @@ import signal
 import subprocess
 import sys
 import time
+from io import BytesIO
 from pathlib import Path
 
 import numpy as np
 import pytest
 import yaml
+import zstandard
+from mcap.data_stream import RecordBuilder
 from mcap.reader import make_reader
+from mcap.records import Chunk, Header
 from mcap.stream_reader import StreamReader
+from mcap.writer import MCAP0_MAGIC, CompressionType, Writer
 from mcap_ros2.reader import read_ros2_messages
 from rclpy.serialization import deserialize_message
 from rosbags.highlevel import AnyReader
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from gpusph_ros.analysis.bag import message_class, read
-from gpusph_ros.output import msgdefs
+from gpusph_ros.output import msgdefs, recording
 from gpusph_ros.runner import Run
 from gpusph_ros.scenes.schema import load_scene
 from gpusph_ros.scenes.settings import resolve
@@ -400,3 +405,39 @@ def test_each_body_frame_is_on_tf_static_where_tf2_msgs_is_installed():
     moved = transforms[0].transform.translation
     assert (moved.x, moved.y, moved.z) == pytest.approx((0.96, 0.3, 0.2))
     assert transforms[0].transform.rotation.w == 1.0
+
+
+def test_a_chunk_that_inflates_past_its_cap_is_refused_unread(tmp_path):
+    """A 2 kB chunk of zeros that says it inflates to 64 MiB (mcap allows 4 GiB; one of 512 MiB cost
+    gpusph-analyze 582 MB, issue 58): the reader keeps the messages before it and says why it
+    stopped, and one whose header lies is read no further than its cap."""
+    path = tmp_path / "bomb.mcap"
+    with open(path, "wb") as f:
+        writer = Writer(f, chunk_size=1 << 20, compression=CompressionType.ZSTD)
+        writer.start("ros2", "test")
+        sid = writer.register_schema("rosgraph_msgs/msg/Clock", "ros2msg", b"")
+        cid = writer.register_channel("/clock", "cdr", sid)
+        writer.add_message(cid, log_time=10, data=np.random.default_rng(0).bytes(2 << 20), publish_time=10)
+        writer.add_message(cid, log_time=20, data=bytes(64 << 20), publish_time=20)
+        writer.finish()
+    with open(path, "rb") as f:
+        sizes = [(len(r.data), r.uncompressed_size) for r in StreamReader(f, emit_chunks=True).records
+                 if isinstance(r, Chunk)]
+    assert sizes[1][0] < 16 << 10 and sizes[1][1] > 64 << 20
+    rec = read(path)
+    assert rec.clock == [pytest.approx(1.0e-8)] and not rec.complete
+    assert "inflates to 67,108,8" in rec.metadata["read_error"] and "not a recording of gpusph_ros" in \
+        rec.metadata["read_error"]
+    assert recording.whole_messages(path) == (1, 10, 0)
+    lying = Chunk(message_start_time=0, message_end_time=0, uncompressed_size=1000, uncompressed_crc=0,
+                  compression="zstd", data=zstandard.compress(bytes(64 << 20)))
+    with pytest.raises(recording.ChunkTooLarge, match=f"inflates to {recording.MIN_CHUNK_CAP + 1:,}\\+ bytes"):
+        list(recording.read_records(_one_chunk(lying)))
+
+
+def _one_chunk(chunk):
+    """An MCAP stream of its header and ``chunk``."""
+    builder = RecordBuilder()
+    Header(profile="ros2", library="test").write(builder)
+    chunk.write(builder)
+    return BytesIO(MCAP0_MAGIC + builder.end())

@@ -57,7 +57,8 @@ def test_a_fluid_box_that_fills_the_whole_tank_is_legal_and_said(tmp_path):
     path.write_text(yaml.safe_dump(full))
     err = io.StringIO()
     with redirect_stderr(err):
-        run_main([str(path), "--set", "dx=0.05", "--set", "output_rate=1000", "--set", "end_time=0.001", "--out", str(tmp_path / "bag"),
+        run_main([str(path), "--set", "dx=0.05", "--set", "output_rate=1000", "--set", "end_time=0.001",
+                  "--out", str(tmp_path / "bag"),
                   "--quiet"])
     assert "gpusph-run: warning: fluid box 'water' fills the whole tank" in err.getvalue(), err.getvalue()
 

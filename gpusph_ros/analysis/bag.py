@@ -13,10 +13,9 @@ import numpy as np
 import yaml
 from mcap.exceptions import McapError
 from mcap.records import Channel, Message, Metadata, Schema
-from mcap.stream_reader import StreamReader
 from rclpy.serialization import deserialize_message
 
-from ..output.recording import bag_files
+from ..output.recording import ChunkTooLarge, bag_files, read_records
 
 
 def mcap_files(path) -> list:
@@ -93,7 +92,7 @@ def _read_file(file, rec: Recording, rows: dict):
     schemas, channels = {}, {}
     with open(file, "rb") as stream:
         try:
-            for record in StreamReader(stream).records:
+            for record in read_records(stream):
                 if isinstance(record, Schema):
                     schemas[record.id] = record.name
                 elif isinstance(record, Channel):
@@ -120,7 +119,8 @@ def _read_file(file, rec: Recording, rows: dict):
                 raise ValueError(f"{file}: not a recording made by gpusph-run or sim_node (no MCAP records: "
                                  f"{type(err).__name__})") from None
             rec.complete = False
-            rec.metadata.setdefault("read_error", f"the file ends mid-record ({type(err).__name__}): a killed run")
+            rec.metadata.setdefault("read_error", f"{file.name}: {err}" if isinstance(err, ChunkTooLarge) else
+                                    f"the file ends mid-record ({type(err).__name__}): a killed run")
 
 
 def read(path) -> Recording:

@@ -17,15 +17,18 @@ at most the last FLUSH_EVERY seconds: its file lacks only the MCAP summary and f
 ``repair`` (``gpusph-analyze --repair BAG``, what ``ros2 bag reindex`` is to rosbag2) rebuilds from
 the complete chunks, so that rosbags and the ``mcap`` tools open it.
 """
+import dataclasses
 import errno
 import shutil
 import time
 from importlib.metadata import version
 from pathlib import Path
 
+import lz4.frame
 import yaml
-from mcap.records import Channel, Header, Message, Metadata, Schema
-from mcap.stream_reader import StreamReader
+import zstandard
+from mcap.records import Channel, Chunk, Header, Message, Metadata, Schema
+from mcap.stream_reader import StreamReader, breakup_chunk
 from mcap.writer import MCAP0_MAGIC, CompressionType, Writer
 from rclpy.serialization import serialize_message
 
@@ -42,8 +45,50 @@ SPACE_MARGIN = 256 * 1024  # [bytes] for metadata.yaml and what the estimate bel
 MESSAGE_OVERHEAD = 64  # [bytes] a message record's header and its message index entry
 
 
+# A chunk may inflate to MAX_CHUNK_RATIO times its compressed bytes, or to MIN_CHUNK_CAP: this
+# writer's chunks hold CHUNK_SIZE of small messages, or one larger message (a particle cloud: float
+# fields, which zstd and lz4 shrink a few times, not tens); mcap itself allows 4 GiB, and a 16 kB
+# chunk of zeros that inflated to 512 MiB cost a reader 582 MB
+MAX_CHUNK_RATIO = 64
+MIN_CHUNK_CAP = 16 * CHUNK_SIZE
+
+
 class DiskFull(OSError):
     """The recording closed itself: its disk has no room for more."""
+
+
+class ChunkTooLarge(ValueError):
+    """A chunk would inflate past what a recording of this package holds (MAX_CHUNK_RATIO)."""
+
+
+def _inflated(chunk: Chunk) -> bytes:
+    """A chunk's records as bytes, decompressed no further than its cap (ChunkTooLarge past it)."""
+    cap = max(MIN_CHUNK_CAP, MAX_CHUNK_RATIO * len(chunk.data))
+    if chunk.uncompressed_size > cap:
+        raise ChunkTooLarge(f"a chunk says it inflates to {chunk.uncompressed_size:,} bytes from "
+                            f"{len(chunk.data):,}, more than {cap:,}: not a recording of gpusph_ros")
+    if chunk.compression == "zstd":
+        data = zstandard.ZstdDecompressor().stream_reader(chunk.data).read(cap + 1)
+    elif chunk.compression == "lz4":
+        data = lz4.frame.LZ4FrameDecompressor().decompress(chunk.data, max_length=cap + 1)
+    elif chunk.compression == "":
+        data = chunk.data
+    else:
+        raise ValueError(f"a chunk compressed with {chunk.compression!r}; expected zstd, lz4 or none")
+    if len(data) != chunk.uncompressed_size:
+        raise ChunkTooLarge(f"a chunk inflates to {len(data):,}{'+' if len(data) > cap else ''} bytes where it says "
+                            f"{chunk.uncompressed_size:,}: damaged, or not a recording of gpusph_ros")
+    return data
+
+
+def read_records(stream):
+    """An MCAP stream's records in order, each chunk opened within its cap (``_inflated``): what
+    mcap's StreamReader gives, without its unbounded decompression."""
+    for record in StreamReader(stream, emit_chunks=True).records:
+        if isinstance(record, Chunk):
+            yield from breakup_chunk(dataclasses.replace(record, compression="", data=_inflated(record)))
+        else:
+            yield record
 
     def __init__(self, message: str):
         super().__init__(errno.ENOSPC, message)
@@ -300,7 +345,7 @@ def _records(f):
     magic, a record's header or a chunk, and the MCAP reader then raises whatever its parse meets
     (McapError, struct.error, EOFError, ...): everything before it is whole."""
     try:
-        yield from StreamReader(f).records
+        yield from read_records(f)
     except Exception:
         return
 
