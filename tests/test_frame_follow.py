@@ -106,3 +106,24 @@ def test_a_body_follows_its_frame_as_a_robot_moves_it():
     assert max(gaps) < 0.004 and len(forces) == len(gaps) == run.n_outputs - 1
     assert np.mean([f.wrench.force.x for f in forces]) == pytest.approx(-1000.0 * 9.81 * 0.3 ** 2 / 2, rel=0.1)
     assert run.solver.excluded_particles == 0
+
+
+@pytest.mark.unit
+def test_what_tf_carries_is_bounded():
+    """Empty and over-long frame ids are not kept; the links stop at MAX_LINKS, the least recently
+    set off the followed chain going first (200,000 frames held 92 MiB); a chain deeper than
+    MAX_CHAIN is refused with the reason (10,000 links cost 110 ms a message) - issue 58."""
+    from gpusph_ros.ros import frame_follow
+
+    follower = FrameFollower({"paddle": "arm"}, "world")
+    assert follower.take([transform("world", ""), transform("world", "x" * 100_000), transform("", "a")]) == []
+    assert follower.links == {}
+    follower.take([transform("world", "base"), transform("base", "arm", (0.5, 0.0, 0.0))])
+    follower.take([transform("world", f"junk_{k}") for k in range(frame_follow.MAX_LINKS + 10)])
+    assert len(follower.links) == frame_follow.MAX_LINKS
+    assert {"base", "arm", f"junk_{frame_follow.MAX_LINKS + 9}"} <= set(follower.links)
+    assert "junk_0" not in follower.links
+    deep = FrameFollower({"paddle": "f0"}, "world")
+    links = [transform(f"f{k + 1}", f"f{k}") for k in range(frame_follow.MAX_CHAIN + 5)]
+    ((_, why),) = deep.take(links + [transform("world", f"f{frame_follow.MAX_CHAIN + 5}")])
+    assert f"more than {frame_follow.MAX_CHAIN} links deep" in why

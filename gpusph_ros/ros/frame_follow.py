@@ -7,11 +7,20 @@ a frame's parents up to the world frame, composing them (a robot's world -> base
 What it gives up against tf2: no interpolation in time; the pose is the newest of each link, stamped
 with the oldest stamp of the chain's moving links (tf2's "latest common time"), or with none (now)
 where every link is static.
+
+What /tf carries is bounded: a frame id empty or longer than a scene's may name is not kept, at
+most MAX_LINKS links are (the least recently updated off every followed chain go first: 200,000
+frames held 92 MiB), and a chain is walked MAX_CHAIN links at most (one of 10,000 cost 110 ms a
+message).
 """
 import numpy as np
 
 from ..output import frames
+from ..scenes.schema import MAX_FRAME_ID
 from ..sph.bodies import quaternion_matrix
+
+MAX_LINKS = 4096  # a robot's tree has tens to hundreds of frames
+MAX_CHAIN = 64  # links from a followed frame up to the world
 
 
 def frame_in(links: dict, frame: str, world: str):
@@ -21,6 +30,8 @@ def frame_in(links: dict, frame: str, world: str):
     while at != world:
         if at in seen:
             return f"the transforms from {frame!r} loop at {at!r}"
+        if len(seen) >= MAX_CHAIN:
+            return f"the transforms from {frame!r} to {world!r} are more than {MAX_CHAIN} links deep"
         seen.add(at)
         if at not in links:
             return f"no transform yet connects {frame!r} to {world!r} ({at!r} has no parent)"
@@ -53,7 +64,8 @@ class FrameFollower:
         touched, bad = set(), {}
         for tf in transforms:
             child, parent = tf.child_frame_id.lstrip("/"), tf.header.frame_id.lstrip("/")
-            if child.startswith(self.world + "/"):
+            if child.startswith(self.world + "/") or not (0 < len(child) <= MAX_FRAME_ID and
+                                                          0 < len(parent) <= MAX_FRAME_ID):
                 continue
             t, r = tf.transform.translation, tf.transform.rotation
             translation, quaternion = np.array([t.x, t.y, t.z], dtype=float), np.array([r.x, r.y, r.z, r.w], float)
@@ -62,8 +74,11 @@ class FrameFollower:
                 bad[child] = f"the transform of {child!r} is not finite with a unit rotation"
                 continue
             stamp = tf.header.stamp.sec + tf.header.stamp.nanosec * 1.0e-9
+            self.links.pop(child, None)  # to the end: the links stand in the order they were last set
             self.links[child] = (parent, translation, quaternion / np.linalg.norm(quaternion), stamp, static)
             touched.add(child)
+        if len(self.links) > MAX_LINKS:
+            self._prune()
         out = []
         for body, frame in self.bodies.items():
             chain = self._chain(frame)
@@ -73,10 +88,17 @@ class FrameFollower:
                 out.append((body, frame_in(self.links, frame, self.world)))
         return out
 
+    def _prune(self):
+        """Down to MAX_LINKS links: the least recently set that no followed frame's chain holds go."""
+        kept = set().union(*(self._chain(frame) for frame in self.bodies.values()))
+        for child in [c for c in self.links if c not in kept][:len(self.links) - MAX_LINKS]:
+            del self.links[child]
+
     def _chain(self, frame: str) -> set:
-        """The frames from ``frame`` up its known parents (the links a change of which moves it)."""
+        """The frames from ``frame`` up its known parents (the links a change of which moves it), at
+        most MAX_CHAIN."""
         chain, at = set(), frame
-        while at not in chain and at != self.world:
+        while at not in chain and at != self.world and len(chain) <= MAX_CHAIN:
             chain.add(at)
             if at not in self.links:
                 break
