@@ -39,7 +39,8 @@ class Progress:
         s = run.solver
         text = f"{s.steps} steps, {s.steps / max(run.wall, 1e-9):.1f} steps/s, {run.mipps():.3f} MIPPS"
         return text + (f", excluded {s.excluded_particles} ({s.excluded_fraction:.3%})" if s.excluded_particles
-                       else "")
+                       else "") + (f", left the tank {s.left_tank_particles} ({s.left_tank_fraction:.3%})"
+                                   if s.left_tank_particles else "")
 
     def __call__(self, run):
         t, end = min(run.solver.time, run.output.end_time), run.output.end_time

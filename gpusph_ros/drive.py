@@ -22,7 +22,8 @@ box stays in the tank (its translation: a rotation's sweep is not checked); a 2D
 only.
 
 A floating body may also be pushed: ``WrenchHold`` keeps the external force and torque a client
-sets (world axes, about its centre of mass), under the same refusals, for a timeout.
+sets (world axes, about its centre of mass), under the same refusals, for a timeout, clamped to
+the body's ``max_force`` and ``max_torque`` (its weight by default), and the reply says so.
 """
 import math
 import threading
@@ -163,11 +164,11 @@ class BodyDriver:
 class WrenchHold:
     """The external force and torque on one floating body (a tether, a thruster), world axes about its
     centre of mass, as its last ``cmd_wrench`` set them: refused as a command is (not finite, from
-    the future, older than the timeout or than the last taken), held for ``timeout`` seconds of
-    simulated time after its stamp, then none."""
+    the future, older than the timeout or than the last taken), clamped to ``max_force`` and
+    ``max_torque``, held for ``timeout`` seconds of simulated time after its stamp, then none."""
 
-    def __init__(self, timeout: float):
-        self.timeout = timeout
+    def __init__(self, timeout: float, max_force: float, max_torque: float):
+        self.timeout, self.max_force, self.max_torque = timeout, max_force, max_torque
         self._lock = threading.Lock()
         self._wrench = None  # (stamp, force, torque)
 
@@ -179,8 +180,13 @@ class WrenchHold:
             why = refusal("wrench", stamp, now, self.timeout, last, force, torque)
             if why:
                 return False, why
-            self._wrench = (stamp, force, torque)
-        return True, "taken"
+            held = (_limit(force, self.max_force), _limit(torque, self.max_torque))
+            self._wrench = (stamp, *held)
+        clamped = [f"{name} clamped to {largest:g} {unit} (the body's max_{name})"
+                   for name, unit, given, kept, largest in (("force", "N", force, held[0], self.max_force),
+                                                             ("torque", "N m", torque, held[1], self.max_torque))
+                   if not np.array_equal(given, kept)]
+        return True, "; ".join(["taken", *clamped])
 
     def wrench(self, now: float) -> tuple:
         """(force, torque) to apply from ``now``: the last one taken while it is fresh, else none."""

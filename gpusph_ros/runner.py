@@ -83,7 +83,8 @@ class Run:
                         for o in world.obstacles
                         if isinstance(o.motion, bodies.Motion) and o.motion.law == "driven"}
         # floating bodies by name: their body id and the external wrench a client holds on them
-        self.wrenches = {o.name: (self.model.bodies[o.name], WrenchHold(WRENCH_TIMEOUT))
+        self.wrenches = {o.name: (self.model.bodies[o.name], WrenchHold(WRENCH_TIMEOUT, o.motion.max_force,
+                                                                        o.motion.max_torque))
                          for o in world.obstacles if isinstance(o.motion, bodies.Floating)}
         self._applied = {}  # the wrench each floating body's solver table holds
 
@@ -345,12 +346,14 @@ class Run:
         return result
 
     def exclusions(self) -> dict:
-        """The fluid particles excluded so far (sph.health): how many, their share of the fluid
-        mass, by reason ('density_bounds 3, wall_penetration 1' or 'none'), the time of the first."""
+        """The fluid particles excluded at fault so far (sph.health): how many, their share of the
+        fluid mass, by fault ('density_bounds 3, wall_penetration 1' or 'none'), the time of the
+        first; and apart, those that left the tank over its walls and their share."""
         s = self.solver
         return {"excluded_particles": s.excluded_particles, "excluded_fraction": s.excluded_fraction,
                 "excluded_by_reason": s.describe_excluded(s.excluded.values()),
-                "first_excluded_time_s": s.first_excluded_time}
+                "first_excluded_time_s": s.first_excluded_time, "left_tank_particles": s.left_tank_particles,
+                "left_tank_fraction": s.left_tank_fraction}
 
     def result(self, status: str) -> dict:
         """The result record a recording closes with."""

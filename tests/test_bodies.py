@@ -10,7 +10,7 @@ from gpusph_ros.analysis.oscillation import whole_periods
 from gpusph_ros.measure.surface import Gauges
 from gpusph_ros.scenes.build import build
 from gpusph_ros.scenes.schema import parse_scene
-from gpusph_ros.sph import Solver
+from gpusph_ros.sph import HealthError, Solver
 from gpusph_ros.sph.config import ConfigError
 
 DX = 0.02
@@ -575,17 +575,7 @@ def test_an_external_wrench_on_a_floating_body_is_held_for_its_timeout():
     up to 0.5 s after its stamp, so it acts over [0, 0.55) s; at 1 s the brick moves at 12 / 6 x
     0.55 m/s along x and its angular momentum about z is 0.05 x 0.55, to round-off; bad pushes are
     refused."""
-    from gpusph_ros.runner import Run
-    from gpusph_ros.scenes.settings import resolve
-
-    # weak gravity: the brick falls 5 cm in 1 s, and the drop stays in its corner
-    scene = parse_scene({"name": "push", "dim": 3, "tank": [2.0, 2.0, 2.0], "walls": "planes",
-                         "gravity": [0, 0, -0.0981],
-                         "fluid": [{"name": "drop", "lo": [0.0, 0.0, 0.0], "hi": [0.1, 0.1, 0.1]}],
-                         "obstacles": [{"name": "brick", "lo": [0.35, 0.9, 1.65], "hi": [0.65, 1.1, 1.75],
-                                        "floating": {"density": 1000}}]})
-    run = Run(scene, resolve(scene, sets=["dx=0.02", "c0=30", "end_time=1.0", "output_rate=20",
-                                         "energy_growth_ratio=0"]))
+    run = _pushed_brick({"max_force": 20.0, "max_torque": 0.1})
     assert run.push("brick", 0.0, [12.0, 0.0, 0.0], [0.0, 0.0, 0.05]) == (True, "taken")
     assert not run.push("brick", 0.5, [1.0, 0.0, 0.0], [0.0, 0.0, 0.0])[0]  # from the future
     assert not run.push("brick", 0.0, [math.nan, 0.0, 0.0], [0.0, 0.0, 0.0])[0]
@@ -596,6 +586,44 @@ def test_an_external_wrench_on_a_floating_body_is_held_for_its_timeout():
     assert run.solver.time == pytest.approx(1.0)
     assert body["velocity"][0] == pytest.approx(12.0 / 6.0 * 0.55, rel=1e-9)
     assert body["angular_momentum"][2] == pytest.approx(0.05 * 0.55, rel=1e-9)
+
+
+def _pushed_brick(limits: dict):
+    """A 6 kg brick high in a 2 m tank under weak gravity (it falls 5 cm in 1 s; the drop of water
+    stays in its corner), its push limited by ``limits``, run to 1 s."""
+    from gpusph_ros.runner import Run
+    from gpusph_ros.scenes.settings import resolve
+
+    scene = parse_scene({"name": "push", "dim": 3, "tank": [2.0, 2.0, 2.0], "walls": "planes",
+                         "gravity": [0, 0, -0.0981],
+                         "fluid": [{"name": "drop", "lo": [0.0, 0.0, 0.0], "hi": [0.1, 0.1, 0.1]}],
+                         "obstacles": [{"name": "brick", "lo": [0.35, 0.9, 1.65], "hi": [0.65, 1.1, 1.75],
+                                        "floating": {"density": 1000, **limits}}]})
+    return Run(scene, resolve(scene, sets=["dx=0.02", "c0=30", "end_time=1.0", "output_rate=20",
+                                           "energy_growth_ratio=0"]))
+
+
+@pytest.mark.physics
+def test_a_push_is_held_to_the_bodys_limits_and_a_body_pushed_out_of_the_domain_fails_the_run_by_name():
+    """By default a push is at most the body's weight (6 kg x 0.0981 m/s^2) and that at its farthest
+    corner; more is clamped and the reply says so (1e308 N was taken whole, issue 58). A declared
+    limit lets 100 N up through: the brick leaves the domain's top (3 m) near t = 0.45 s, and the run
+    fails on body_outside naming the brick and the push, where it flew on with /diagnostics OK."""
+    run = _pushed_brick({})
+    weight = 6.0 * 0.0981
+    reach = math.sqrt(0.15 ** 2 + 0.1 ** 2 + 0.05 ** 2)
+    taken, reply = run.push("brick", 0.0, [0.0, 0.0, 1.0e308], [0.0, 0.0, 1.0])
+    assert taken and reply == (f"taken; force clamped to {weight:g} N (the body's max_force); torque clamped to "
+                               f"{weight * reach:g} N m (the body's max_torque)")
+    force, torque = run.wrenches["brick"][1].wrench(0.0)
+    assert force == pytest.approx([0.0, 0.0, weight]) and torque == pytest.approx([0.0, 0.0, weight * reach])
+    run = _pushed_brick({"max_force": 1000.0})
+    assert run.push("brick", 0.0, [0.0, 0.0, 100.0], [0.0, 0.0, 0.0]) == (True, "taken")
+    with pytest.raises(HealthError) as err:
+        while not run.done:
+            run.step_output()
+    assert err.value.check == "body_outside" and 0.35 < err.value.time < 0.55
+    assert "the floating body 'brick' left the domain, pushed by an external force of 100 N" in str(err.value)
 
 
 def wedge_scene(beta_deg: float, speed: float):

@@ -23,8 +23,8 @@ def test_the_issue_list_of_parameters_is_declared():
     assert names == {"scene", "dx", "kernel", "viscosity", "sps", "boundary", "density_diffusion", "precision",
                      "device", "cfl", "c0", "end_time", "output_rate", "real_time_factor", "publish_particles",
                      "particle_fields", "record_dir", "frame_id", "autostart", "model", "crop", "wall_planes",
-                     "max_excluded_fraction", "mdbc_slip", "visco_bound_factor", "compression", "stamps",
-                     "state_file"}
+                     "max_excluded_fraction", "max_left_fraction", "mdbc_slip", "visco_bound_factor", "compression",
+                     "stamps", "state_file"}
     for p in PARAMS:
         assert p.description and p.applies in (node_params.RESET, node_params.LIVE, node_params.RECORDING,
                                                node_params.STARTUP, node_params.SERVICE)
@@ -44,6 +44,7 @@ def test_defaults_describe_a_run():
     ({"sps": True}, ["sps", "laminar", "'artificial'"]),
     ({"boundary": "planes"}, ["boundary", "lennard_jones, monaghan_kajtar, dynamic"]),
     ({"dx": 0.0}, ["dx", "[0.0001, 10]"]),
+    ({"dx": 1.0e-4}, ["dx: 0.0001", "a coarser spacing", "max_particles is 50,000,000"]),  # was left pending
     ({"cfl": 1.5}, ["cfl", "[0.01, 1]"]),
     ({"device": "cuda:7"}, ["device", "'cuda:7'", "cpu"]),
     ({"scene": "no_such_scene"}, ["scene", "no_such_scene", "dambreak1_thesis"]),
@@ -116,3 +117,13 @@ def test_every_live_parameter_reaches_the_session_as_its_settings():
     assert settings == {"end_time": run_settings(_values())[1].output.end_time, "output_rate": 50.0,
                         "particle_rate": 0.0}  # the outputs go as one
     assert node_params.live_settings(_values(output_rate=50.0), ["output_rate"])["particle_rate"] == 50.0
+
+
+def test_a_scene_that_reset_would_refuse_is_refused_when_set(tmp_path):
+    """A 1e300 m tank was accepted as the scene parameter and stayed pending until ~/reset refused
+    it (issue 58): its particles are priced when it is set."""
+    path = tmp_path / "vast.yaml"
+    path.write_text("name: vast\ndim: 2\ntank: [1.0e+300, 1.0]\n"
+                    "fluid:\n  - {name: sea, lo: [0, 0], hi: [1.0e+300, 0.5]}\n")
+    reason = check(_values(scene=str(path)), changed={"scene": str(path)})
+    assert reason is not None and reason.startswith("dx: ") and "particles" in reason, reason

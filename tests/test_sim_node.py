@@ -627,7 +627,7 @@ def test_a_floating_box_takes_an_external_wrench_from_cmd_wrench(client, tmp_pat
     scene = {"name": "float", "dim": 2, "tank": [1.0, 0.6],
              "fluid": [{"name": "water", "lo": [0, 0], "hi": [1.0, 0.3]}],
              "obstacles": [{"name": "box", "lo": [0.4, 0.24], "hi": [0.6, 0.36], "displaces_fluid": True,
-                            "floating": {"density": 500.0, "rotate": False}}]}
+                            "floating": {"density": 500.0, "rotate": False, "max_force": 400.0}}]}
     path = tmp_path / "float.yaml"
     path.write_text(yaml.safe_dump(scene))
     pose_topic = "/sim_node/bodies/box/pose"
@@ -656,6 +656,17 @@ def test_a_floating_box_takes_an_external_wrench_from_cmd_wrench(client, tmp_pat
     status = _diagnostic(client, lambda s: int(s.get("commands_refused_box", 0)) >= 1
                          and int(s.get("commands_taken_box", 0)) >= 1)
     assert status["level"] != DiagnosticStatus.ERROR
+    # once the run has ended a push is refused, where it was counted as taken; a reset counts anew
+    now = _t(client.received(pose_topic)[-1].header.stamp)
+    assert client.set(end_time=round(now + 0.2, 2)).successful
+    ended = _diagnostic(client, lambda s: s["state"] == "finished", timeout=120.0)
+    taken, refused = int(ended.get("commands_taken_box", 0)), int(ended.get("commands_refused_box", 0))
+    publisher.publish(WrenchStamped())
+    later = _diagnostic(client, lambda s: int(s.get("commands_refused_box", 0)) > refused)
+    assert int(later.get("commands_taken_box", 0)) == taken
+    assert client.call("reset", Trigger).success
+    _diagnostic(client, lambda s: s["state"] != "finished" and "commands_taken_box" not in s
+                and "commands_refused_box" not in s)
 
 
 def test_a_body_that_follows_a_tf_frame_runs_where_tf2_msgs_is_missing(client, node, tmp_path):

@@ -344,11 +344,14 @@ def excluded_line(result: dict) -> str:
     if "excluded_particles" not in result:
         return "exclusions not recorded"
     n = int(float(result["excluded_particles"]))
+    left = int(float(result.get("left_tank_particles", 0)))
+    gone = (f"; {left} fluid particle{'s' if left > 1 else ''} left the tank over its walls "
+            f"({float(result['left_tank_fraction']):.3%} of the fluid mass)") if left else ""
     if not n:
-        return "no particle excluded"
+        return "no particle excluded" + gone
     first = result.get("first_excluded_time_s")
     return (f"excluded {n} fluid particle{'s' if n > 1 else ''} ({float(result['excluded_fraction']):.3%} of the "
-            f"fluid mass: {result.get('excluded_by_reason')}; the first at t = {float(first):.4g} s)")
+            f"fluid mass: {result.get('excluded_by_reason')}; the first at t = {float(first):.4g} s)" + gone)
 
 
 HEALTH_PEAKS = ("peak_clumped_fraction", "min_density_ratio", "max_density_ratio", "peak_energy_growth")

@@ -103,4 +103,4 @@ class CloudPacker:
             wp.copy(self._host, self._rows)  # into pinned memory: asynchronous until the sync below
         wp.synchronize_device(s.device)
         rows = self._host.numpy()
-        return rows[s.kept()] if s.excluded_particles or s.config.zones else rows
+        return rows[s.kept()] if s.excluded_particles or s.left_tank_particles or s.config.zones else rows

@@ -12,6 +12,8 @@ from pathlib import Path
 
 from ..measure.cloud import FIELDS as PARTICLE_FIELDS
 from ..output.folders import folder_problem
+from ..scenes import resources
+from ..scenes.build import fluid_boxes, priced
 from ..scenes.reduce import MODELS
 from ..scenes.schema import FRAME_ID, MAX_FRAME_ID, MAX_PATH, builtin_names, load_scene
 from ..scenes.settings import COMPRESSIONS, STAMPS, resolve
@@ -156,7 +158,11 @@ def check(values: dict, changed=None):
         return (f"sps: true needs viscosity laminar (SPS adds the sub-particle-scale stress to laminar "
                 f"viscosity); viscosity is {values['viscosity']!r}")
     try:
-        run_settings(values)
+        scene, config = run_settings(values)
+        # what ~/reset's build would refuse (a 1e300 m tank, a dx of 0.1 mm), refused when set, not
+        # left pending: the particles it makes at most against max_particles and free memory
+        reduced, cfg, _ = priced(scene, config)
+        resources.check(reduced, cfg, fluid_boxes(reduced))
     except ConfigError as err:
         return str(err)
     return None

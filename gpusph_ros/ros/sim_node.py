@@ -68,17 +68,21 @@ def _qos(reliable: bool, depth: int, transient_local: bool = False) -> QoSProfil
 
 def _service(method):
     """A service callback that always answers: refused after shut-down, and whatever it raises
-    becomes the reply's reason (and an ERROR diagnostic)."""
+    becomes the reply's reason (and an ERROR diagnostic, until a later request succeeds: a good
+    ~/load_state after a failed one left /diagnostics at ERROR)."""
     @functools.wraps(method)
     def call(self, request, response):
         if self.session.state == "shut down":
             response.success, response.message = False, "the node is shut down (lifecycle state finalized)"
             return response
         try:
-            return method(self, request, response)
+            response = method(self, request, response)
         except Exception as err:  # the node outlives any one request
             response.success, response.message = False, self._internal(method.__name__.strip("_"), err)
             return response
+        if response.success:
+            self.internal_error = ""
+        return response
     return call
 
 
@@ -143,7 +147,8 @@ class SimNode(LifecycleNode):
         self._commands_executor = SingleThreadedExecutor(context=self.context)
         self._commands_executor.add_node(self._commands_node)
         threading.Thread(target=self._spin_commands, daemon=True, name="commands").start()
-        self.internal_error = ""  # the last unexpected error a callback caught, until the next build
+        # the last unexpected error a callback caught, until the next build or a request that succeeds
+        self.internal_error = ""
         self._logged = set()
         self._reset_lock = threading.Lock()
         self.add_on_set_parameters_callback(self._check_parameters)
@@ -196,6 +201,8 @@ class SimNode(LifecycleNode):
         changes = {p.name: p.value for p in parameters if p.name in node_params.BY_NAME}
         if not changes:
             return SetParametersResult(successful=True)
+        # a check that raised (a refused record_dir among them) is an error only until one succeeds
+        self.internal_error = ""
         if self.session.state == "shut down":  # as the services: nothing more is taken
             return SetParametersResult(successful=False, reason=f"{', '.join(changes)}: the node is shut down "
                                                                 "(lifecycle state finalized); start a new one")
@@ -285,6 +292,8 @@ class SimNode(LifecycleNode):
             if run is None or follower is None:
                 return
             for body, result in follower.take(msg.transforms, static):
+                if self._ended(body, f"frame {follower.bodies[body]!r} on /tf"):
+                    continue
                 taken, why = frame_follow.command(run, body, result)
                 self._count(body, f"frame {follower.bodies[body]!r} on /tf", taken, why)
         except Exception as err:  # a message the layers below did not foresee: logged, never an exit
@@ -297,6 +306,8 @@ class SimNode(LifecycleNode):
         try:
             run = self.session.run
             if run is None:
+                return
+            if self._ended(body, kind):
                 return
             dim = run.model.config.dim
             stamp = run.stamp_time(msg.header.stamp.sec + msg.header.stamp.nanosec * 1.0e-9)
@@ -322,6 +333,15 @@ class SimNode(LifecycleNode):
             self._count(body, kind, taken, why)
         except Exception as err:  # a command the layers below did not foresee: logged, never an exit
             self._internal(f"~/bodies/{body}/cmd_{kind}", err)
+
+    def _ended(self, body: str, kind: str) -> bool:
+        """Whether the run can no longer take a command (failed, finished, shut down): then it is
+        counted as refused, with the reason (they were counted as taken after the run ended)."""
+        state = self.session.state
+        if state in ("running", "paused", "stepping", "inactive"):
+            return False
+        self._count(body, kind, False, f"{kind}: the run is {state}; ~/reset starts it again")
+        return True
 
     def _count(self, body: str, kind: str, taken: bool, why: str):
         """A command taken or refused, counted for /diagnostics; a refusal or a clamp logged (``kind``:
@@ -353,6 +373,8 @@ class SimNode(LifecycleNode):
         self.session.real_time_factor = self.value("real_time_factor")
         self.awaiting_reset.clear()
         self.internal_error = ""
+        with self._commands_lock:  # a new run's commands are counted from none
+            self.commands.clear()
         text = run.summary()
         self.get_logger().info(text)
         for warning in run.scene.warnings:
@@ -553,6 +575,9 @@ class SimNode(LifecycleNode):
             level = DiagnosticStatus.WARN
             message += (f"; {stats['excluded_particles']} fluid particles excluded "
                         f"({stats['excluded_fraction']:.3%} of the fluid mass: {stats['excluded_by_reason']})")
+        if stats.get("left_tank_particles"):  # physics, not a fault: said, not warned of
+            message += (f"; {stats['left_tank_particles']} fluid particles left the tank over its walls "
+                        f"({stats['left_tank_fraction']:.3%} of the fluid mass)")
         if self.internal_error:
             level, message = DiagnosticStatus.ERROR, f"{message}; {self.internal_error}"
             stats["internal_error"] = self.internal_error

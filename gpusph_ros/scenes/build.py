@@ -41,7 +41,7 @@ class Model:
 
     def solver(self) -> Solver:
         """A solver that starts from this model."""
-        return Solver(self.config, self.particles)
+        return Solver(self.config, self.particles, body_names=sorted(self.bodies, key=self.bodies.get))
 
 
 def floor_rectangles(extent, footprints, dim: int) -> list:

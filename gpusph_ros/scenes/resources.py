@@ -42,7 +42,7 @@ def particle_bound(scene, cfg: SolverConfig, fluid_boxes) -> int:
         return n
     model = boundaries.model(cfg.boundary)
     up = dim - 1
-    axis = {face: up if face == "floor" else "xy".index(face[0]) for face in faces}
+    axis = {face: up if face in ("floor", "lid") else "xy".index(face[0]) for face in faces}
     if model.volume:
         # exactly boxes.wall_particles: the fluid's lattice continued ``layers`` deep beyond each
         # particle face, less the tank's inside
@@ -53,7 +53,7 @@ def particle_bound(scene, cfg: SolverConfig, fluid_boxes) -> int:
     spacing = model.spacing(dx, cfg.mk_beta)
     layers = model.layers(cfg.hdx) + 1  # the shell sits half a spacing out
     outer = [cells(scene.tank[ax], spacing) + (0 if scene.periodic[ax] else 2 * layers) for ax in range(up)]
-    outer.append(cells(scene.tank[up], spacing) + layers)
+    outer.append(cells(scene.tank[up], spacing) + layers * (2 if "lid" in scene.walls else 1))
     for face in faces:  # each face's slab of wall particles, edges counted twice
         ax = axis[face]
         if not scene.periodic[ax]:

@@ -35,7 +35,7 @@ PROBE_TYPES = ("point", "column", "profile", "gauge", "pressure_sensor")
 # face; ``smoothed``, as De Courcy et al. 2024 read theirs (the fluid at the face, a kernel twice as wide,
 # negative pressures clipped)
 SENSOR_READINGS = ("wall", "smoothed")
-SCENE_KEYS = ("name", "description", "source", "dim", "tank", "headroom", "gravity", "depth", "periodic",
+SCENE_KEYS = ("name", "description", "source", "dim", "tank", "headroom", "lid", "gravity", "depth", "periodic",
               "walls", "fluid", "wet_bed", "obstacles", "refine", "probes", "run", "analysis")
 # a refinement zone's spacing over the scene's dx: each level halves its parent's (scenes/refine.py)
 ZONE_RATIOS = (0.5, 0.25, 0.125)
@@ -341,9 +341,9 @@ def _unique(where, names):
         seen.add(name)
 
 
-def _walls(walls_in, dim) -> dict:
-    """The wall kind of each face: one kind for all, or a mapping face -> kind."""
-    faces = wall_faces(dim)
+def _walls(walls_in, dim, lid: bool) -> dict:
+    """The wall kind of each face (the top's too with a lid): one kind for all, or a mapping face -> kind."""
+    faces = wall_faces(dim, lid)
     if isinstance(walls_in, str):
         walls_in = {face: walls_in for face in faces}
     walls_in = _mapping("walls", walls_in, faces)
@@ -388,7 +388,7 @@ def _obstacles(items, tank, dim, depth: float, g: float) -> list:
         if item.get("motion") is not None:
             obstacle.motion = _motion(f"{where}.motion", item["motion"], obstacle, tank, dim, depth, g)
         if item.get("floating") is not None:
-            obstacle.motion = _floating(f"{where}.floating", item["floating"], obstacle, dim)
+            obstacle.motion = _floating(f"{where}.floating", item["floating"], obstacle, dim, g)
         obstacles.append(obstacle)
     _unique("obstacles", [o.name for o in obstacles])
     return obstacles
@@ -608,7 +608,10 @@ def _motion(where, value, obstacle, tank, dim, depth: float, g: float) -> bodies
 
 
 FLOATING_KEYS = ("density", "mass", "centre_of_mass", "inertia", "translate", "rotate", "release", "velocity",
-                 "omega")
+                 "omega", "max_force", "max_torque")
+# a client's push on a floating body (cmd_wrench) is held to its weight by default: 300 N up on a
+# 10 kg/m box sent it 7.5 m up, through the headroom, before anything said so (issue 58)
+MAX_FORCE_LIMIT = 1.0e9  # [N] the most a scene may allow
 
 
 def _flags(where, value, length) -> tuple:
@@ -619,12 +622,13 @@ def _flags(where, value, length) -> tuple:
     return tuple(value)
 
 
-def _floating(where, value, obstacle, dim) -> bodies.Floating:
+def _floating(where, value, obstacle, dim, g: float) -> bodies.Floating:
     """A floating obstacle (sph/bodies.py): its mass from ``density`` x its solid's volume (area per
     unit depth in 2D; scenes/shapes.py) or given, its centre of mass (default the solid's centroid),
     its inertia about that (default the uniform solid's, carried to the centre of mass), which axes
     it may move along and turn about (2D: translate [x, y], rotate about z), when it is let go, and
-    its velocity and angular velocity then."""
+    its velocity and angular velocity then, and the largest force and torque a client may push it
+    with (default its weight m g, and m g at its farthest corner from the centre of mass)."""
     item = _mapping(where, value, FLOATING_KEYS)
     if obstacle.shape == "points":
         for key in ("mass", "centre_of_mass", "inertia"):
@@ -662,9 +666,13 @@ def _floating(where, value, obstacle, dim) -> bodies.Floating:
     velocity = _pad3(_vector(f"{where}.velocity", item.get("velocity", [0.0] * dim), dim))
     omega = (0.0, 0.0, _number(f"{where}.omega", item.get("omega", 0.0))) if dim == 2 else \
         _vector(f"{where}.omega", item.get("omega", [0.0] * 3), 3)
+    weight = mass * g
+    reach = bodies.farthest_corner(obstacle.lo, obstacle.hi, com)
+    max_force = _number(f"{where}.max_force", item.get("max_force", weight), lo=0.0, hi=MAX_FORCE_LIMIT)
+    max_torque = _number(f"{where}.max_torque", item.get("max_torque", weight * reach), lo=0.0, hi=MAX_FORCE_LIMIT)
     return bodies.Floating(mass=mass, centre=com, inertia=inertia, translate=translate, rotate=rotate,
                            release=_number(f"{where}.release", item.get("release", 0.0), lo=0.0),
-                           velocity=velocity, omega=omega,
+                           velocity=velocity, omega=omega, max_force=max_force, max_torque=max_torque,
                            corner_lo=tuple(a - c for a, c in zip(obstacle.lo, com)),
                            corner_hi=tuple(b - c for b, c in zip(obstacle.hi, com)), **shapes.contact(obstacle, dim))
 
@@ -799,7 +807,10 @@ def parse_scene(data, default_name: str = "scene") -> Scene:
         raise ConfigError("periodic", periodic, f"a list of {dim} booleans, false for the vertical axis")
     periodic = tuple(periodic) + (False,) * (3 - dim)
 
-    walls = _walls(data.get("walls", "particles"), dim)
+    lid = data.get("lid", False)
+    if not isinstance(lid, bool):
+        raise ConfigError("lid", lid, "true or false (a wall across the tank's top, of the kind walls.lid names)")
+    walls = _walls(data.get("walls", "particles"), dim, lid)
 
     fluid_in = data["fluid"]
     if not isinstance(fluid_in, list) or not fluid_in:
@@ -816,7 +827,7 @@ def parse_scene(data, default_name: str = "scene") -> Scene:
                                                                       f"overlaps {a.name!r}")
     surface = max(b.hi[up] for b in fluid)
     warnings = [f"fluid box {b.name!r} fills the whole tank: the water has nowhere to go but over the walls"
-                for b in fluid if all(b.lo[ax] <= 0.0 and b.hi[ax] >= tank[ax] for ax in range(dim))]
+                for b in fluid if not lid and all(b.lo[ax] <= 0.0 and b.hi[ax] >= tank[ax] for ax in range(dim))]
     # the reference depth H sets c0 = c0_coef sqrt(g H) and the wall forces: a fluid deeper than the
     # tank is no tank's, and its sound speed would take millions of steps a second
     depth = _number("depth", data.get("depth", surface), lo=0.0, hi=tank[up], lo_open=True)

@@ -180,6 +180,10 @@ class Floating:
     radius: float = 0.0
     round_axis: tuple = (0.0, 0.0, 0.0)
     half_length: float = 0.0
+    # the largest external force [N; N/m in 2D] and torque [N m] a client may put on it (cmd_wrench):
+    # by default its weight, and its weight at its farthest corner (schema._floating)
+    max_force: float = 0.0
+    max_torque: float = 0.0
 
 
 def clamped_spline(t, y) -> np.ndarray:
@@ -741,6 +745,20 @@ def build(scalar):
                         part[k, 2 * b + 1] = part[k, 2 * b + 1] + wp.cross(arm, f)
 
     @wp.kernel(enable_backward=False, module="unique")
+    def body_bounds(laws: wp.array(dtype=Law), candidate: wp.array(dtype=Rigid), lo: wp.vec3d, hi: wp.vec3d,
+                    fail: wp.array(dtype=wp.int32)):
+        """Flags body_outside with the lowest id of a floating body whose centre left the domain [lo,
+        hi] in the candidate: no wall stops one above an open tank, and a push can carry it there."""
+        b = wp.tid()
+        law = laws[b]
+        if law.kind != FLOATING:
+            return
+        centre = box_centre(law, candidate[b])
+        for ax in range(3):
+            if centre[ax] < lo[ax] or centre[ax] > hi[ax]:
+                wp.atomic_min(fail, health.BODY_OUTSIDE, b)
+
+    @wp.kernel(enable_backward=False, module="unique")
     def commit_rigid(fail: wp.array(dtype=wp.int32), candidate: wp.array(dtype=Rigid), state: wp.array(dtype=Rigid)):
         """The candidate's floating bodies become the state, if the step is healthy."""
         b = wp.tid()
@@ -833,7 +851,7 @@ def build(scalar):
         return wp.array(table, dtype=Rigid, device=device)
 
     return SimpleNamespace(Law=Law, Rigid=Rigid, Pose=Pose, body_poses=body_poses, body_contacts=body_contacts,
-                           move_walls=move_walls,
-                           wrench_sums=wrench_sums, commit_rigid=commit_rigid, work_on_fluid=work_on_fluid,
+                           move_walls=move_walls, wrench_sums=wrench_sums, body_bounds=body_bounds,
+                           commit_rigid=commit_rigid, work_on_fluid=work_on_fluid,
                            law_list=law_list, segment=segment, external=external,
                            rigid_states=rigid_states)

@@ -145,6 +145,10 @@ class HealthLimits:
         0.01, "share of the fluid mass that may be excluded (a particle whose density, position or step is at "
         "fault leaves the flow and is counted) before the run fails; 0 = the first fault fails it",
         lo=0.0, hi=0.99, node=True)
+    max_left_fraction: float = setting(
+        1.0, "share of the fluid mass that may leave an open tank over its walls (counted apart as left_tank: "
+        "physics, not a fault) before the run fails; 1 = no limit, 0 = the first particle to leave fails it",
+        lo=0.0, hi=1.0, node=True)
 
 
 @dataclass

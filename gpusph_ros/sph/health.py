@@ -5,15 +5,19 @@ NO_FAILURE); a state with any slot set is never committed.
 
 Faults of one particle (REASONS):
 - non_finite: NaN or infinity in a position, velocity or density;
-- outside_domain: a fluid particle left the domain (the tank, its walls and headroom), or the tank
-  over the top of a wall (beyond a wall's face above ``wall_top``: a run-up without a wall friction
-  climbs DamBreak 1's 0.4 m walls, docs/results/wall_pressure.md);
+- outside_domain: a fluid particle left the domain (the tank, its walls and headroom) other than
+  over the walls' top (left_tank);
 - density_bounds: a density outside [rho_min, rho_max] (0.8 and 1.25 rho0 by default);
 - wall_penetration: a fluid particle more than ``penetration_ratio`` dx beyond a wall face of the
   tank below the walls' top, or as deep inside a solid box: the boundary let it through;
 - displacement: a fluid particle moved more than 0.9 of the kernel support 2h in one step (as
   DualSPHysics' CODE_OUTMOV, MovLimit = 0.9 of its 2h cell): its neighbour list no longer holds
-  the particles it met.
+  the particles it met;
+- left_tank: a fluid particle went over the top of a wall, or out of the domain above it, at no
+  more than the displacement limit: water leaving an open tank, which is physics, not a fault of
+  the scheme (a frictionless run-up climbs a tank 1.67 H tall at 1.14 s in 2D; a scene with ``lid:
+  true`` has none). It is excluded like a fault but counted apart, against ``max_left_fraction``
+  (no limit by default), not ``max_excluded_fraction``.
 
 A fluid particle at fault is excluded, as DualSPHysics excludes and counts its CODE_OUTRHO /
 OUTPOS / OUTMOV particles: it keeps its id, last committed position and density, stops at rest
@@ -39,10 +43,13 @@ Faults of the whole state:
   ``energy_growth_ratio`` M g H above its value at the start: in a closed tank with no inflow
   every term of the scheme conserves or dissipates it, so growth is the integrator going unstable;
 - excluded_fraction: the excluded fluid would pass ``max_excluded_fraction`` of the fluid mass;
+- left_fraction: the fluid that left the tank would pass ``max_left_fraction`` of its mass;
 - zone_reserve: a refinement level needed more particles than the build reserved for it
   (levels.py: fluid arriving at a zone gets fine particles in slots reserved for them);
 - zone_edge: a moving body came within levels.edge_margin of a refinement zone's face (a body
   crossing from one level to another is not carried: levels.py);
+- body_outside: a floating body's centre left the domain (a push, cmd_wrench, past what the fluid
+  and its weight hold: bodies.body_bounds); the slot holds the body's id;
 - neighbour_overflow: a particle has more neighbours than the lists hold (neighbours.py); the solver
   widens them and takes the step again, unless their width was fixed.
 """
@@ -58,16 +65,19 @@ FLUID = state.FLUID
 BOUNDARY = state.BOUNDARY
 
 # the checks, in the order they are reported; each name's index is its slot in ``fail``
-CHECKS = ("non_finite", "outside_domain", "density_bounds", "wall_penetration", "displacement", "clumping",
-          "energy_growth", "excluded_fraction", "zone_reserve", "zone_edge", "neighbour_overflow")
-(NON_FINITE, OUTSIDE_DOMAIN, DENSITY_BOUNDS, WALL_PENETRATION, DISPLACEMENT, CLUMPING, ENERGY_GROWTH,
- EXCLUDED_FRACTION, ZONE_RESERVE, ZONE_EDGE, NEIGHBOUR_OVERFLOW) = range(len(CHECKS))
+CHECKS = ("non_finite", "outside_domain", "density_bounds", "wall_penetration", "displacement", "left_tank",
+          "clumping", "energy_growth", "excluded_fraction", "left_fraction", "zone_reserve", "zone_edge",
+          "body_outside", "neighbour_overflow")
+(NON_FINITE, OUTSIDE_DOMAIN, DENSITY_BOUNDS, WALL_PENETRATION, DISPLACEMENT, LEFT_TANK, CLUMPING, ENERGY_GROWTH,
+ EXCLUDED_FRACTION, LEFT_FRACTION, ZONE_RESERVE, ZONE_EDGE, BODY_OUTSIDE, NEIGHBOUR_OVERFLOW) = range(len(CHECKS))
 N_CHECKS = len(CHECKS)
-# the faults of one particle, which exclude a fluid particle; their index is their slot in ``fail``
-REASONS = CHECKS[:DISPLACEMENT + 1]
+# why a fluid particle is excluded; each index is its slot in ``fail``: the faults of one particle
+# (FAULTS), and water leaving the tank
+REASONS = CHECKS[:LEFT_TANK + 1]
+FAULTS = REASONS[:LEFT_TANK]
 N_REASONS = len(REASONS)
 # checks of the whole state, not of one particle
-GLOBAL_CHECKS = ("energy_growth", "excluded_fraction")
+GLOBAL_CHECKS = ("energy_growth", "excluded_fraction", "left_fraction")
 NO_FAILURE = 2 ** 31 - 1
 CLUMP_WALL_DX = 2.0  # [dx] clumping is not counted this close to a wall or solid: a sheet two particles thin
 CLUMP_MIN = 16  # clumped particles below which no fraction is a failure: in a run of 18 particles one pair is 11%
@@ -79,8 +89,12 @@ ENERGY, ENERGY_START, PEAK_CLUMPED, PEAK_ENERGY_GROWTH, RHO_LOW, RHO_HIGH, WORK 
 CENSUS_START = (0.0, NO_ENERGY, 0.0, 0.0, 1.0e300, -1.0e300, 0.0)  # before any census
 # slots of the clumping count: clumped fluid particles away from walls, the first of them
 CLUMPED, FIRST_CLUMPED = range(2)
-# slots of the excluded mass: the fluid mass excluded, the time of the first exclusion (-1 before)
-MASS, FIRST_TIME = range(2)
+# slots of the excluded mass: the fluid mass excluded at fault, the time of the first such exclusion (-1
+# before), the fluid mass that left the tank
+MASS, FIRST_TIME, LEFT_MASS = range(3)
+EXCLUDED_START = (0.0, -1.0, 0.0)
+# slots of the pending mass: at fault, left the tank
+PENDING_FAULT, PENDING_LEFT = range(2)
 # the excluded mass of a step is summed as an integer, in units of 2^-MASS_BITS of the fluid mass, so
 # that it is the same whatever order the particles are added in (a float atomic sum is not, on a
 # GPU): a particle's mass is rounded by at most 4e-16 of the fluid's, and the whole fluid fits an int64
@@ -113,7 +127,7 @@ def params(cfg, fluid_mass: float, n_fluid: int) -> dict:
             "clump_fraction": cfg.clump_fraction, "n_fluid": max(1, n_fluid),
             "energy_slack": cfg.energy_growth_ratio * fluid_mass * cfg.g_norm * cfg.depth,
             "move_limit2": (0.9 * 2.0 * cfg.h) ** 2, "exclude": 1 if cfg.max_excluded_fraction > 0.0 else 0,
-            "excluded_limit": cfg.max_excluded_fraction * fluid_mass,
+            "excluded_limit": cfg.max_excluded_fraction * fluid_mass, "left_limit": cfg.max_left_fraction * fluid_mass,
             "mass_units": 2.0 ** MASS_BITS / fluid_mass if fluid_mass > 0.0 else 1.0}
 
 
@@ -163,25 +177,27 @@ def build(scalar):
             if bad_density:
                 return DENSITY_BOUNDS
             return -1
-        if not in_box(x, p.lo, p.hi, scalar(0.0), 3):
-            return OUTSIDE_DOMAIN
-        if bad_density:
-            return DENSITY_BOUNDS
-        # beyond a tank wall face (above the walls' top it went over them: it left the tank), or as
-        # deep inside a solid
-        depth = p.penetration * scale
-        if not in_box(x, p.wall_lo, p.wall_hi, depth, 3):
-            if x[p.dim - 1] > p.wall_top:
-                return OUTSIDE_DOMAIN
-            return WALL_PENETRATION
-        if in_solid(p, x, solid_lo, solid_hi, -depth):
-            return WALL_PENETRATION
         d = x - x_before
         for ax in range(3):
             if p.periodic[ax] != 0:  # a particle that wrapped moved by the minimum image
                 span = p.hi[ax] - p.lo[ax]
                 d[ax] = d[ax] - span * wp.round(d[ax] / span)
-        if wp.dot(d, d) > p.move_limit2 * scale * scale:
+        jumped = wp.dot(d, d) > p.move_limit2 * scale * scale
+        # beyond a tank wall's face (or the domain) above the walls' top, at a flow's pace: over the walls
+        depth = p.penetration * scale
+        outside = not in_box(x, p.lo, p.hi, scalar(0.0), 3)
+        beyond = not in_box(x, p.wall_lo, p.wall_hi, depth, 3)
+        if (outside or beyond) and x[p.dim - 1] > p.wall_top and not jumped:
+            return LEFT_TANK
+        if outside:
+            return OUTSIDE_DOMAIN
+        if bad_density:
+            return DENSITY_BOUNDS
+        if beyond:
+            return WALL_PENETRATION
+        if in_solid(p, x, solid_lo, solid_hi, -depth):
+            return WALL_PENETRATION
+        if jumped:
             return DISPLACEMENT
         return -1
 
@@ -193,9 +209,10 @@ def build(scalar):
                         fail: wp.array(dtype=wp.int32), faulty: wp.array(dtype=wp.int32),
                         pending: wp.array(dtype=wp.int32), pending_mass: wp.array(dtype=wp.int64)):
         """Checks each particle of the candidate state (pos_c, vel_c, rho_c). A fluid particle at
-        fault, when exclusion is on, is marked in ``faulty`` for commit to exclude and counted in
-        ``pending`` (by reason) and ``pending_mass`` (in p.mass_units); any other fault flags its slot in ``fail``
-        with the caller's particle id (the slots are re-sorted by later steps of the batch)."""
+        fault, when exclusion is on, or that left the tank is marked in ``faulty`` for commit to exclude
+        and counted in ``pending`` (by reason) and ``pending_mass`` (PENDING_FAULT or PENDING_LEFT, in
+        p.mass_units); any other fault flags its slot in ``fail`` with the caller's particle id (the
+        slots are re-sorted by later steps of the batch)."""
         i = wp.tid()
         t = ptype[i]
         if t != FLUID and t != BOUNDARY:
@@ -203,10 +220,11 @@ def build(scalar):
         reason = fault(p, pos_c[i], pos[i], vel_c[i], rho_c[i], t, own_scale(p, hsml[i]), solid_lo, solid_hi)
         if reason < 0:
             return
-        if t == FLUID and p.exclude != 0:
+        if t == FLUID and (p.exclude != 0 or reason == LEFT_TANK):
             faulty[i] = 1
             wp.atomic_add(pending, reason, 1)
-            wp.atomic_add(pending_mass, 0, wp.int64(wp.round(wp.float64(mass[i]) * p.mass_units)))
+            wp.atomic_add(pending_mass, wp.where(reason == LEFT_TANK, PENDING_LEFT, PENDING_FAULT),
+                          wp.int64(wp.round(wp.float64(mass[i]) * p.mass_units)))
         else:
             wp.atomic_min(fail, reason, ids[i])
 
@@ -214,21 +232,27 @@ def build(scalar):
     def exclusion_check(p: Params, clock: wp.array(dtype=wp.float64), pending: wp.array(dtype=wp.int32),
                         pending_mass: wp.array(dtype=wp.int64), excluded: wp.array(dtype=wp.int32),
                         excluded_mass: wp.array(dtype=wp.float64), fail: wp.array(dtype=wp.int32)):
-        """After every other check of the candidate: flags excluded_fraction when the excluded
-        fluid would pass the limit; else, if the candidate is to be committed, adds this step's
-        exclusions to the run's (excluded_mass = [mass, time of the first exclusion or -1]).
-        A failed step's exclusions stay pending for the report."""
-        if pending_mass[0] <= wp.int64(0):
+        """After every other check of the candidate: flags excluded_fraction when the fluid excluded
+        at fault would pass its limit, left_fraction when the fluid that left the tank would; else,
+        if the candidate is to be committed, adds this step's exclusions to the run's (excluded_mass:
+        MASS, FIRST_TIME of an exclusion at fault or -1, LEFT_MASS). A failed step's exclusions stay
+        pending for the report."""
+        if pending_mass[PENDING_FAULT] <= wp.int64(0) and pending_mass[PENDING_LEFT] <= wp.int64(0):
             return
-        pending_kg = wp.float64(pending_mass[0]) / p.mass_units
-        if excluded_mass[MASS] + pending_kg > p.excluded_limit:
+        fault_kg = wp.float64(pending_mass[PENDING_FAULT]) / p.mass_units
+        left_kg = wp.float64(pending_mass[PENDING_LEFT]) / p.mass_units
+        if excluded_mass[MASS] + fault_kg > p.excluded_limit:
             fail[EXCLUDED_FRACTION] = 0
+        if excluded_mass[LEFT_MASS] + left_kg > p.left_limit:
+            fail[LEFT_FRACTION] = 0
         if not healthy(fail):
             return
-        if excluded_mass[FIRST_TIME] < wp.float64(0.0):
+        if excluded_mass[FIRST_TIME] < wp.float64(0.0) and fault_kg > wp.float64(0.0):
             excluded_mass[FIRST_TIME] = clock[T] + wp.float64(p.coarse_stride) * clock[DT]  # the step's end
-        excluded_mass[MASS] = excluded_mass[MASS] + pending_kg
-        pending_mass[0] = wp.int64(0)
+        excluded_mass[MASS] = excluded_mass[MASS] + fault_kg
+        excluded_mass[LEFT_MASS] = excluded_mass[LEFT_MASS] + left_kg
+        pending_mass[PENDING_FAULT] = wp.int64(0)
+        pending_mass[PENDING_LEFT] = wp.int64(0)
         for k in range(N_REASONS):
             excluded[k] = excluded[k] + pending[k]
             pending[k] = 0

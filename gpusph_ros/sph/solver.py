@@ -77,8 +77,11 @@ class Solver:
     returns host copies in the caller's order.
     """
 
-    def __init__(self, config: SolverConfig, particles: Particles, max_neighbours: "int | None" = None):
+    def __init__(self, config: SolverConfig, particles: Particles, max_neighbours: "int | None" = None,
+                 body_names: "list | None" = None):
         self.config = config.validate()
+        # each body's name by id, for what a report says of it (the scene's obstacles)
+        self.body_names = list(body_names) if body_names else [f"body {k}" for k in range(len(config.motions))]
         cfg = self.config
         self.scalar = wp.float64 if cfg.precision == "float64" else wp.float32
         self.vec = wp.types.vector(3, self.scalar)
@@ -119,7 +122,7 @@ class Solver:
         self._step_hooks = []
         self._graph = graph.LoopGraph(self)
         self.time, self.dt, self.dt_stable, self.steps = 0.0, 0.0, 0.0, 0
-        self._excluded_host = (np.zeros(health.N_REASONS, dtype=np.int32), np.array([0.0, -1.0]))
+        self._excluded_host = (np.zeros(health.N_REASONS, dtype=np.int32), np.array(health.EXCLUDED_START))
         self._census_host = np.array(health.CENSUS_START)  # as of the last sync
 
     @property
@@ -245,9 +248,9 @@ class Solver:
         # mass until the step commits; the run's counts, and [mass, time of the first or -1]
         self._faulty = wp.zeros(n, dtype=wp.int32, device=dev)
         self._pending = wp.zeros(health.N_REASONS, dtype=wp.int32, device=dev)
-        self._pending_units = wp.zeros(1, dtype=wp.int64, device=dev)  # in Params.mass_units
+        self._pending_units = wp.zeros(2, dtype=wp.int64, device=dev)  # in Params.mass_units: health.PENDING_*
         self._excluded = wp.zeros(health.N_REASONS, dtype=wp.int32, device=dev)
-        self._excluded_mass = arr(np.array([0.0, -1.0]), wp.float64)
+        self._excluded_mass = arr(np.array(health.EXCLUDED_START), wp.float64)
         self._clock = wp.zeros(N_CLOCK, dtype=wp.float64, device=dev)  # slots state.T ... TARGET
         steps = np.zeros(N_STEPS, dtype=np.int32)  # slots state.STEP ... IN_BLOCK
         steps[FAILED_STEP] = -1
@@ -383,6 +386,10 @@ class Solver:
                   device=dev)
         if self._pairs:
             wp.launch(B.body_contacts, dim=1, inputs=[self._laws, factor, out, self._poses], device=dev)
+        if into == 2 and self._floating:
+            wp.launch(B.body_bounds, dim=len(self.config.motions),
+                      inputs=[self._laws, out, wp.vec3d(*self.config.domain_lo), wp.vec3d(*self.config.domain_hi),
+                              self._fail], device=dev)
         wp.launch(B.move_walls, dim=self.n, inputs=[self._laws, self._poses, self.ptype, self.body, self.ids,
                                                     self._rest, pos, vel, self.wall_acc], device=dev)
 
@@ -581,14 +588,18 @@ class Solver:
         for check, idx in zip(health.CHECKS, fail):
             if idx == health.NO_FAILURE:
                 continue
-            if check == "excluded_fraction":
+            if check in ("excluded_fraction", "left_fraction"):
                 counts = self._excluded_host[0] + self._pending.numpy()
-                pending = float(self._pending_units.numpy()[0]) / self.params.mass_units
-                mass = self._excluded_host[1][health.MASS] + pending
+                left = check == "left_fraction"
+                pending = self._pending_units.numpy()[health.PENDING_LEFT if left else health.PENDING_FAULT]
+                mass = self._excluded_host[1][health.LEFT_MASS if left else health.MASS] + \
+                    float(pending) / self.params.mass_units
+                what = (f"would have left the tank over its walls ({int(counts[health.LEFT_TANK])} particles), "
+                        f"more than max_left_fraction {self.config.max_left_fraction:.2%}" if left else
+                        f"would be excluded ({self.describe_excluded(counts)}), more than max_excluded_fraction "
+                        f"{self.config.max_excluded_fraction:.2%}")
                 raise HealthError(check, int(steps[FAILED_STEP]), float(clock[T_FAILED]), -1,
-                                  f"{mass / self._fluid_mass:.2%} of the fluid mass would be excluded "
-                                  f"({self.describe_excluded(counts)}), more than max_excluded_fraction "
-                                  f"{self.config.max_excluded_fraction:.2%}")
+                                  f"{mass / self._fluid_mass:.2%} of the fluid mass {what}")
             if check in health.GLOBAL_CHECKS:
                 e = self._energy_sum.numpy()
                 raise HealthError(check, int(steps[FAILED_STEP]), float(clock[T_FAILED]), -1,
@@ -599,6 +610,12 @@ class Solver:
             if check == "zone_reserve":
                 detail = ("the fluid reaching a refinement zone (refine:) needs more fine particles than the "
                           "build reserved for it")
+            if check == "body_outside":
+                law = self._law_list[int(idx)]
+                pushed = float(np.linalg.norm([float(law.ext_force[k]) for k in range(3)]))
+                raise HealthError(check, int(steps[FAILED_STEP]), float(clock[T_FAILED]), -1,
+                                  f"the floating body {self.body_names[int(idx)]!r} left the domain"
+                                  + (f", pushed by an external force of {pushed:.4g} N (cmd_wrench)" if pushed else ""))
             if check == "zone_edge":
                 detail = ("a moving body came to a refinement zone's face: a body stays inside its zone or clear "
                           "of it by levels.edge_margin (a larger zone about it, or one farther off)")
@@ -617,17 +634,30 @@ class Solver:
 
     @property
     def excluded(self) -> dict:
-        """Fluid particles excluded so far, by reason (health.REASONS), as of the last sync."""
-        return {reason: int(c) for reason, c in zip(health.REASONS, self._excluded_host[0])}
+        """Fluid particles excluded at fault so far, by fault (health.FAULTS), as of the last sync."""
+        return {reason: int(c) for reason, c in zip(health.FAULTS, self._excluded_host[0])}
 
     @property
     def excluded_particles(self) -> int:
-        return int(self._excluded_host[0].sum())
+        return int(self._excluded_host[0][:len(health.FAULTS)].sum())
 
     @property
     def excluded_fraction(self) -> float:
-        """The excluded fluid's share of the fluid mass."""
-        return float(self._excluded_host[1][health.MASS]) / self._fluid_mass if self._fluid_mass > 0.0 else 0.0
+        """The share of the fluid mass excluded at fault."""
+        return self._mass_share(health.MASS)
+
+    @property
+    def left_tank_particles(self) -> int:
+        """Fluid particles that left the tank over its walls (health.LEFT_TANK), as of the last sync."""
+        return int(self._excluded_host[0][health.LEFT_TANK])
+
+    @property
+    def left_tank_fraction(self) -> float:
+        """The share of the fluid mass that left the tank over its walls."""
+        return self._mass_share(health.LEFT_MASS)
+
+    def _mass_share(self, slot: int) -> float:
+        return float(self._excluded_host[1][slot]) / self._fluid_mass if self._fluid_mass > 0.0 else 0.0
 
     @property
     def health_peaks(self) -> dict:
@@ -655,8 +685,9 @@ class Solver:
 
     @staticmethod
     def describe_excluded(counts) -> str:
-        """'density_bounds 3, wall_penetration 1' from counts by reason; 'none' when all are 0."""
-        return ", ".join(f"{r} {int(c)}" for r, c in zip(health.REASONS, counts) if c) or "none"
+        """'density_bounds 3, wall_penetration 1' from counts by reason (the faults only); 'none' when
+        all are 0."""
+        return ", ".join(f"{r} {int(c)}" for r, c in zip(health.FAULTS, counts) if c) or "none"
 
     def kept(self) -> np.ndarray:
         """Which particles, in the caller's order, are the flow and its walls: not excluded, not a

@@ -106,6 +106,7 @@ def build(scalar):
         move_limit2: scalar  # (0.9 x 2h)^2: the displacement check's limit, squared
         exclude: int  # 1: a fluid particle at fault is excluded; 0: it fails the run
         excluded_limit: wp.float64  # max_excluded_fraction x the fluid mass [kg]
+        left_limit: wp.float64  # max_left_fraction x the fluid mass [kg]
         mass_units: wp.float64  # integer units per kg of the pending excluded mass (health.MASS_BITS)
 
     @wp.struct
