@@ -1,9 +1,12 @@
-"""A soak of sim_node: a node stepping collapse_2d at 2 cm for --minutes, driven by one client that
-makes a call at random every --period seconds (about) of every kind a user or a hostile client makes:
-parameter gets, live and reset parameter sets, refused values (a 100 kB choice, a frame id that is no
-ROS name, an out-of-range number), ~/set_paused, ~/step, ~/record on and off, ~/reset, ~/save_state
-and ~/load_state (of the state saved, of a FIFO, of a pickle that carries code) and lifecycle
-deactivate / activate. Every call has 2 s to answer.
+"""A soak of sim_node: a node stepping a small 2D tank (SCENE: a driven paddle and a floating box) at
+3 cm for --minutes, driven by one client that makes a call at random every --period seconds (about) of
+every kind a user or a hostile client makes: parameter gets, live and reset parameter sets, refused
+values (a 100 kB choice, a frame id that is no ROS name, an out-of-range number), ~/set_paused,
+~/step, ~/record on and off, ~/reset, ~/save_state and ~/load_state (of the state saved, of a FIFO,
+of a pickle that carries code), lifecycle deactivate / activate, and the bodies' commands: poses and
+twists for the paddle and wrenches for the box, good and hostile (not finite, 1e308, another frame,
+a stamp from the future, a rotation that is not one), one at a time or in bursts of 200. Every call
+has 2 s to answer.
 
 Every --sample seconds it samples the node's resident memory, open files and threads from /proc;
 each bag the node has closed is opened with rosbags and its messages counted against its index
@@ -35,6 +38,17 @@ BENCH = Path(__file__).resolve().parent
 sys.path.insert(0, str(BENCH.parent / "tests"))
 ANSWER = 2.0  # [s] the longest a call may take
 WARM_UP = 5.0  # [min] RSS growth is fitted after this
+SCENE = """name: soak_bodies
+dim: 2
+tank: [1.2, 0.6]
+fluid:
+  - {name: water, lo: [0.1, 0.0], hi: [1.2, 0.3]}
+obstacles:
+  - {name: paddle, lo: [0.04, 0.0], hi: [0.1, 0.6],
+     motion: {type: driven, max_speed: 0.3, max_acceleration: 3.0, timeout: 0.5}}
+  - {name: box, lo: [0.6, 0.25], hi: [0.8, 0.35], displaces_fluid: true, floating: {density: 500}}
+"""
+BURST = 200  # commands published back to back
 
 
 class _Payload:
@@ -79,6 +93,7 @@ def _check_closed_bags(folder: Path, keep_open: bool) -> list:
 
 
 def soak(minutes: float, out: Path, seed: int, period: float, sample: float) -> int:
+    from geometry_msgs.msg import PoseStamped, TwistStamped, WrenchStamped
     from lifecycle_msgs.msg import Transition
     from lifecycle_msgs.srv import ChangeState
     from std_srvs.srv import SetBool, Trigger
@@ -91,17 +106,45 @@ def soak(minutes: float, out: Path, seed: int, period: float, sample: float) -> 
     bags.mkdir()
     fifo, poison, marker = work / "state.fifo", work / "poison.npz", work / "ran"
     os.mkfifo(fifo)
+    scene = work / "soak_bodies.yaml"
+    scene.write_text(SCENE)
     poison.write_bytes(pickle.dumps({"scene": _Payload(marker)}))
     domain = 200 + os.getpid() % 30
     env = {**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
            "PYTHONUNBUFFERED": "1"}
     log = open(work / "node.log", "w")
-    node = subprocess.Popen([sys.executable, "-m", "gpusph_ros.ros.sim_node", "--ros-args", "-p", "scene:=collapse_2d",
-                             "-p", "dx:=0.02", "-p", "end_time:=100000.0", "-p", "real_time_factor:=1.0",
+    node = subprocess.Popen([sys.executable, "-m", "gpusph_ros.ros.sim_node", "--ros-args", "-p", f"scene:={scene}",
+                             "-p", "dx:=0.03", "-p", "end_time:=100000.0", "-p", "real_time_factor:=1.0",
                              "-p", f"record_dir:={bags}", "-p", f"state_file:={saved}"],
                             env=env, stdout=log, stderr=subprocess.STDOUT)
     client = Client(domain)
     calls, samples, read = [], [], []
+    publishers = {kind: client.node.create_publisher(msg_type, f"/sim_node/bodies/{body}/cmd_{kind}", 10)
+                  for kind, body, msg_type in (("pose", "paddle", PoseStamped), ("twist", "paddle", TwistStamped),
+                                               ("wrench", "box", WrenchStamped))}
+
+    def command(kind, hostile=None):
+        """A body command, good or with one hostile field (a stamp of zero: now)."""
+        msg = {"pose": PoseStamped, "twist": TwistStamped, "wrench": WrenchStamped}[kind]()
+        value = {"nan": float("nan"), "huge": 1.0e308}.get(hostile, rng.uniform(-0.5, 0.5))
+        if kind == "pose":
+            msg.pose.position.x, msg.pose.position.z, msg.pose.orientation.w = 0.07 + 0.05 * value, 0.3, 1.0
+            if hostile == "turn":
+                msg.pose.orientation.w = 2.0
+        elif kind == "twist":
+            msg.twist.linear.x = value
+        else:
+            msg.wrench.force.z, msg.wrench.torque.y = 20.0 * value, value
+        if hostile == "frame":
+            msg.header.frame_id = "base_link"
+        if hostile == "future":
+            msg.header.stamp.sec = 2_000_000_000
+        publishers[kind].publish(msg)
+
+    def commands():
+        kind = rng.choice(["pose", "twist", "wrench"])
+        for _ in range(BURST if rng.random() < 0.2 else 1):
+            command(kind, rng.choice([None, None, "nan", "huge", "frame", "future", "turn"]))
 
     def lifecycle(label):
         ids = {"deactivate": Transition.TRANSITION_DEACTIVATE, "activate": Transition.TRANSITION_ACTIVATE}
@@ -133,12 +176,13 @@ def soak(minutes: float, out: Path, seed: int, period: float, sample: float) -> 
         "load_state fifo": load(fifo),
         "load_state pickle": load(poison),
         "lifecycle": lambda: lifecycle(rng.choice(["deactivate", "activate"])),
+        "body commands": commands,
     }
     try:
         deadline = time.monotonic() + 300
         while node.poll() is None and time.monotonic() < deadline:  # up and stepping
             try:
-                if "collapse_2d" in client.call("reset", Trigger, timeout=10.0).message:
+                if "soak_bodies" in client.call("reset", Trigger, timeout=10.0).message:
                     break
             except TimeoutError:
                 pass
@@ -147,7 +191,7 @@ def soak(minutes: float, out: Path, seed: int, period: float, sample: float) -> 
             client.call(name, srv, timeout=30.0, **({"data": False} if srv is SetBool else {}))
         start = time.monotonic()
         end, next_sample = start + 60.0 * minutes, start
-        print(f"soak: sim_node pid {node.pid}, collapse_2d at 2 cm, {minutes:g} min, a call about every "
+        print(f"soak: sim_node pid {node.pid}, {scene.stem} at 3 cm, {minutes:g} min, a call about every "
               f"{period:g} s, samples every {sample:g} s -> {out}", flush=True)
         while time.monotonic() < end and node.poll() is None:
             now = time.monotonic()
@@ -201,8 +245,10 @@ def _report(out: Path, minutes, samples, calls, read, alive, ran, work) -> int:
     slow = [c for c in calls if c["latency_s"] > ANSWER]
     broken = [b for b in read if not b[2]]
     lines = [f"# sim_node soak: {minutes:g} minutes", "",
-             "`python bench/soak.py --minutes %g` (collapse_2d at 2 cm, real_time_factor 1, recording on and "
-             "off at random; one client, a call about every 0.5 s). The node's log: %s." % (minutes, work / "node.log"),
+             "`python bench/soak.py --minutes %g` (a 2D tank with a driven paddle and a floating box at 3 cm, "
+             "real_time_factor 1, recording on and off at random; one client, a call about every 0.5 s, body "
+             "commands among them, good and hostile, alone or %d at once). The node's log: %s."
+             % (minutes, BURST, work / "node.log"),
              "", f"- node alive at the end: {alive}; the pickle's command ran: {ran}",
              f"- calls: {len(calls)}; unanswered within {ANSWER:g} s: {len(unanswered)}; slower than {ANSWER:g} s: "
              f"{len(slow)}",
