@@ -154,7 +154,10 @@ def _run(args, stop) -> int:
     if result["status"] == "completed":
         checkpoints.remove()
     elif result["status"] == "interrupted" and run.output.checkpoint_interval and not run.torn:
-        print(f"checkpoint: {checkpoints.write(run)}; continue with gpusph-run --resume {out}", flush=True)
+        try:
+            print(f"checkpoint: {checkpoints.write(run)}; continue with gpusph-run --resume {out}", flush=True)
+        except (OSError, ValueError) as err:  # a full disk, a path that is no regular file: said, not a traceback
+            print(f"gpusph-run: no checkpoint written: {err}", file=sys.stderr, flush=True)
     return 0 if result["status"] == "completed" else 2
 
 

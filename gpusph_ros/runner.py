@@ -412,6 +412,9 @@ def resume(folder):
 
     folder = Path(folder)
     path = folder / CHECKPOINT_FILE
+    if path.is_symlink():  # it resumed, then Ctrl-C could not write the checkpoint over it
+        raise ValueError(f"--resume: {path} is a symbolic link; a checkpoint is a regular file only (put the file "
+                         "it points to in its place)")
     if not path.is_file():
         if (folder / PICKLED_CHECKPOINT).exists():
             raise ValueError(f"--resume: {folder} holds {PICKLED_CHECKPOINT}, the checkpoint of an earlier version, "

@@ -5,6 +5,7 @@ import copy
 import os
 import pickle
 import signal
+import shutil
 import subprocess
 import sys
 import time
@@ -110,6 +111,18 @@ def test_resume_refuses_what_it_cannot_continue(tmp_path):
         out.stderr
     out = _cli("--resume", str(tmp_path), "--set", "dx=0.01")
     assert out.returncode == 2 and "--resume DIR alone" in out.stderr, out.stderr
+    # a checkpoint that is a link to one elsewhere: refused before anything changes, where it resumed and
+    # Ctrl-C then ended on a traceback, writing no checkpoint (issue 58)
+    real = tmp_path / "real"
+    _stopped_run(real)
+    linked = tmp_path / "linked"
+    shutil.copytree(real, linked)
+    (linked / CHECKPOINT_FILE).unlink()
+    (linked / CHECKPOINT_FILE).symlink_to(real / CHECKPOINT_FILE)
+    before = sorted(p.name for p in linked.iterdir())
+    out = _cli("--resume", str(linked))
+    assert out.returncode == 1 and "is a symbolic link" in out.stderr and "Traceback" not in out.stderr, out.stderr
+    assert sorted(p.name for p in linked.iterdir()) == before
 
 
 class _Payload:
