@@ -7,7 +7,10 @@ copy, fill, host read and allocation around a small scene's steps (sph/device_ca
 - A step whose lists are stale sorts once; a reorder step sorts once too (the build reads the
   reorder's sort).
 - Between two outputs the host reads nothing and nothing is allocated: the host reads the clock
-  and the flags once before the loop and once after it (Solver._sync), eager or replayed.
+  and the flags once before the loop and once after it (Solver._sync), eager or replayed. Replayed,
+  no branch takes its flag to the host; eager, six a step do (the loop's RUNNING, REORDER_DUE, the
+  lists' stale flag, LISTS_HOLD, CENSUS_DUE, SHEPARD_DUE) and the loop's last test: a GPU without
+  conditional graph nodes waits for its stream that often (docs/results/speed.md).
 """
 import collections
 
@@ -76,3 +79,24 @@ def test_between_outputs_the_host_reads_nothing_and_nothing_is_allocated(step_gr
         assert s.steps - steps >= 20
         assert counts["sync"] == 2, counts  # before the loop and after it
         assert counts["host_read"] == counts["allocation"] == 0, counts
+        assert counts["branch"] == (0 if step_graph == "on" else 6 * (s.steps - steps) + 1), counts
+
+
+def test_an_output_sorts_once_however_many_measurements_ask():
+    """Lobovsky's tank: four pressure sensors and four gauges read the device at each output through
+    one measurement view, one pressure pass and one cell sort (each measurement made its own), and
+    a state read again without a step between sorts nothing."""
+    from gpusph_ros.runner import Run
+    from gpusph_ros.scenes.schema import load_scene
+    from gpusph_ros.scenes.settings import resolve
+
+    scene = load_scene("lobovsky_2d")
+    run = Run(scene, resolve(scene, sets=["dx=0.03", "cpu_threads=1"]))
+    for k in range(3):
+        run.solver.advance(k / run.output.output_rate)
+        with counting(Solver) as counts:
+            msgs = run.output_messages(k)
+        assert len(msgs) >= 9 and counts["sort"] == 1, counts
+        with counting(Solver) as counts:
+            run.output_messages(k)
+        assert counts["sort"] == 0, counts

@@ -281,4 +281,5 @@ def put(solver, state: dict):
     for holder, obj in (("solver", solver), ("neighbours", nl)):
         for name, value in state["host"][holder].items():
             setattr(obj, name, value)
+    solver._view_fresh = False
     wp.synchronize_device(solver.device)

@@ -5,7 +5,9 @@ and branch reads, by wrapping Warp's own functions while the block runs. The ste
 replayed graph's launches happen inside Warp and count as one replay.
 
 What ``Solver._sync`` reads (the clock, step counts and health flags once an output) is counted as
-syncs, not as host reads, so that a read anywhere else stands out.
+syncs, not as host reads, so that a read anywhere else stands out. A branch read is a flag that
+``wp.capture_if`` or ``wp.capture_while`` (each pass of its loop, and the test that ends it) takes
+to the host outside a capture: free on a CPU, a copy and a wait for the stream on a GPU.
 
 ``strict`` makes a CPU run fail where a GPU would refuse or reorder: Warp's CPU device runs a
 kernel's threads one after another and a CPU capture only records calls, which hides both.
@@ -27,7 +29,7 @@ ALLOCATING = ("array_scan", "array_sum", "array_inner", "runlength_encode")
 class GpuRefusal(AssertionError):
     """What a GPU would refuse, met on the CPU under ``strict``."""
 
-KINDS = ("launch", "sort", "scan", "copy", "fill", "host_read", "allocation", "replay", "sync")
+KINDS = ("launch", "sort", "scan", "copy", "fill", "host_read", "allocation", "replay", "sync", "branch")
 
 
 @contextlib.contextmanager
@@ -66,6 +68,41 @@ def counting(solver_class=None):
     for name in ("synchronize", "synchronize_device", "synchronize_stream"):
         wrap(wp, name, "host_read")
     wrap(wp, "capture_launch", "replay")
+    capturing = []
+    enter, leave = wp.ScopedCapture.__enter__, wp.ScopedCapture.__exit__
+
+    def entered(self):
+        capturing.append(True)
+        return enter(self)
+
+    def left(self, *exc):
+        capturing.pop()
+        return leave(self, *exc)
+
+    def branch(name, reads):
+        original = getattr(wp, name)
+
+        def read(*args, **kwargs):
+            if capturing or in_sync:  # recorded, not read; a sync's own reads are the sync's
+                return original(*args, **kwargs)
+            counts["branch"] += 1
+            return original(*reads(*args), **kwargs)
+
+        setattr(wp, name, read)
+        undo.append((wp, name, original))
+
+    def each_pass(condition, body, *rest):  # capture_while reads its flag again after each pass of its body
+        def counted_body(*a, **kw):
+            counts["branch"] += 1
+            return body(*a, **kw)
+
+        return (condition, counted_body, *rest)
+
+    for owner, name, replacement in ((wp.ScopedCapture, "__enter__", entered), (wp.ScopedCapture, "__exit__", left)):
+        undo.append((owner, name, getattr(owner, name)))
+        setattr(owner, name, replacement)
+    branch("capture_if", lambda *args: args)
+    branch("capture_while", each_pass)
     allocators = {type(d.get_allocator()) for d in wp.get_devices()}
     for allocator in allocators:
         wrap(allocator, "allocate", "allocation")
