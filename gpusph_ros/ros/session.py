@@ -9,6 +9,7 @@ in this thread, except a reset's build, which runs while this thread is held idl
 step raises ends the run as a failure the node reports; the thread never dies of it.
 """
 import datetime
+import gc
 import threading
 import time
 from pathlib import Path
@@ -284,7 +285,12 @@ class Session:
                 self._pace = self._window = None
             return run
 
-        return self._held(swap)
+        run = self._held(swap)
+        # the old run's solver holds cycles (its step hooks, its captured loop), so only the cyclic
+        # collector frees its arrays and its launch threads: a soak of resets held up to 70 threads
+        # and their runs' memory until it ran, and on a GPU that memory is the next build's
+        gc.collect()
+        return run
 
     def _held(self, work):
         """``work(run)`` with the solver held between two steps; what it returns."""
