@@ -6,7 +6,7 @@ exhausting the machine.
 Memory per particle (measured with ``Solver.device_bytes`` on DamBreak 1 and the 2D collapse, and
 checked by the tests): the neighbour list, 4 bytes x ``default_max_neighbours`` (248 in 3D, 72 in
 2D at h = 1.3 dx: the most a run's lists may widen to; the solver measures its own, narrower at the
-start, sph/neighbours.py), and 66 scalars of state, half-step, candidate and scratch arrays plus 68
+start, sph/neighbours.py), and 58 scalars of state, half-step, candidate and scratch arrays plus 60
 bytes of integers. Building the particles on the host takes about HOST_BYTES a particle more.
 Refinement zones are counted exactly as they are split, each level before it is made
 (``check_count``, from refine.split), with the wider lists a refined run holds.
@@ -21,7 +21,7 @@ from ..sph.neighbours import default_max_neighbours
 from .boxes import cells
 
 HOST_BYTES = 200  # numpy arrays of the particle set and the lattice fills, per particle
-_SCALARS, _INTEGER_BYTES = 66, 76
+_SCALARS, _INTEGER_BYTES = 58, 60
 _LEVEL_BYTES = 20  # with zones: the levels' spawn and free-slot bookkeeping (sph/levels.py)
 USABLE = 0.9  # of the free memory a run may plan to take
 # the most particles whose arrays Warp can shape: the cell sort's keys hold 2 n int32 entries, and a

@@ -174,8 +174,8 @@ class Solver:
         self._needs_list = arr(needs.astype(np.int32), wp.int32)
         self.ghost = wp.zeros(n, dtype=v, device=dev)  # mDBC's ghost-node offsets (boundaries/mdbc.py); else zero
         self._spawned = wp.zeros(n, dtype=wp.int32, device=dev)  # refinement levels: which fluid has daughters
-        self._sorted = [wp.empty_like(a) for a in (self.pos, self.vel, self.rho, self.mass, self.hsml, self.ptype,
-                                                   self.body, self.ids, self._needs_list, self.ghost, self._spawned)]
+        # the reorder's scratch, one array of each type the state holds (passes.permute)
+        self._gathered = {t: wp.empty(n, dtype=t, device=dev) for t in (v, s, wp.int32)}
         self.pressure = wp.zeros(n, dtype=s, device=dev)
         # half-step and candidate states, rates of change
         self._pos_h, self._vel_h, self._rho_h = (wp.zeros_like(a) for a in (self.pos, self.vel, self.rho))
@@ -304,9 +304,10 @@ class Solver:
         state = [self.pos, self.vel, self.rho, self.mass, self.hsml, self.ptype, self.body, self.ids,
                  self._needs_list, self.ghost, self._spawned]
         order = self.neighbours.sort(self.pos)
-        wp.launch(self._passes.permute, dim=self.n, inputs=[order, *state, *self._sorted], device=self.device)
-        for dst, src in zip(state, self._sorted):
-            wp.copy(dst, src)
+        for a in state:
+            into = self._gathered[a.dtype]
+            wp.launch(self._passes.permute[a.dtype], dim=self.n, inputs=[order, a, into], device=self.device)
+            wp.copy(a, into)
         self.neighbours.rebuild_sorted(self.pos)
 
     def _launch_step(self, block: int = _UNBOUNDED):
@@ -828,7 +829,9 @@ class Solver:
         seen, total = set(), 0
 
         def arrays(value):
-            if isinstance(value, (list, tuple)):
+            if isinstance(value, dict):
+                yield from arrays(list(value.values()))
+            elif isinstance(value, (list, tuple)):
                 for item in value:
                     yield from arrays(item)
             elif isinstance(value, wp.array):
