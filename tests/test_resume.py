@@ -4,8 +4,8 @@ reads whole with rosbags and the analysis."""
 import copy
 import os
 import pickle
-import signal
 import shutil
+import signal
 import subprocess
 import sys
 import time

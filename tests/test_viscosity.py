@@ -61,3 +61,26 @@ def test_poiseuille_profile(viscosity):
         expected = (cfg.sps_cs * DX) ** 2 * np.abs(dudy) * dudy
         scale = np.abs(expected[interior]).max()
         assert np.abs(off[interior, 0] - expected[interior]).max() < 0.1 * scale
+
+
+def test_a_live_change_to_sps_allocates_its_stress_and_the_profile_holds():
+    """The SPS stress is held only under sps (six scalars a particle; issue 59): a laminar channel
+    switched to sps halfway (Solver.reconfigure, as the node's live viscosity parameter does) gets
+    its stress then, and ends on the same Poiseuille profile and Smagorinsky shear stress."""
+    cfg, parts = channel("laminar")
+    solver = Solver(cfg, parts)
+    t_end = 1.5 * L ** 2 / NU
+    solver.advance(0.5 * t_end)
+    before = solver.device_bytes()
+    solver.reconfigure(viscosity="sps")
+    assert solver.device_bytes() - before == 6 * 8 * solver.n  # float64: two vectors a particle
+    solver.advance(t_end)
+    snap = solver.snapshot()
+    f = snap["ptype"] == FLUID
+    y, u = snap["pos"][f, 1], snap["vel"][f, 0]
+    assert np.sqrt(np.mean((u - G / (2 * NU) * y * (L - y)) ** 2)) < 0.05 * U_MAX
+    dudy = G / (2 * NU) * (L - 2 * y)
+    interior = (y > 3 * cfg.h) & (y < L - 3 * cfg.h)
+    expected = (cfg.sps_cs * DX) ** 2 * np.abs(dudy) * dudy
+    off = snap["sps_tau_off"][f][interior, 0]
+    assert np.abs(off - expected[interior]).max() < 0.1 * np.abs(expected[interior]).max()

@@ -22,6 +22,7 @@ from .boxes import cells
 
 HOST_BYTES = 200  # numpy arrays of the particle set and the lattice fills, per particle
 _SCALARS, _INTEGER_BYTES = 58, 60
+_STRESS = 6  # of the scalars: the SPS stress, held only under viscosity sps
 _LEVEL_BYTES = 20  # with zones: the levels' spawn and free-slot bookkeeping (sph/levels.py)
 USABLE = 0.9  # of the free memory a run may plan to take
 # the most particles whose arrays Warp can shape: the cell sort's keys hold 2 n int32 entries, and a
@@ -68,7 +69,8 @@ def device_bytes(n: int, cfg: SolverConfig, refined: bool = False) -> int:
     finest = 0.5 if refined else 1.0
     integers = _INTEGER_BYTES + (_LEVEL_BYTES if refined else 0)
     substeps = coarse_stride(cfg, refined)
-    return n * (4 * default_max_neighbours(cfg.dim, cfg.hdx, finest, substeps) + _SCALARS * scalar + integers)
+    scalars = _SCALARS - (0 if cfg.viscosity == "sps" else _STRESS)
+    return n * (4 * default_max_neighbours(cfg.dim, cfg.hdx, finest, substeps) + scalars * scalar + integers)
 
 
 def host_free_bytes() -> int:

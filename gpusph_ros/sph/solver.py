@@ -183,9 +183,12 @@ class Solver:
         self.acc, self._xsph = wp.zeros(n, dtype=v, device=dev), wp.zeros(n, dtype=v, device=dev)
         self._shift = wp.zeros(n, dtype=v, device=dev)
         self._drho = wp.zeros(n, dtype=s, device=dev)
+        # the SPS stress only under sps (24 B a particle; one entry, never read, otherwise): a live
+        # change to sps allocates it (reconfigure)
+        stress = n if cfg.viscosity == "sps" else 1
         shared = dict(pressure=self.pressure, p_rho2=wp.zeros(n, dtype=s, device=dev), mass=self.mass,
-                      hsml=self.hsml, ptype=self.ptype, body=self.body, tau_diag=wp.zeros(n, dtype=v, device=dev),
-                      tau_off=wp.zeros(n, dtype=v, device=dev), wall_acc=wp.zeros(n, dtype=v, device=dev))
+                      hsml=self.hsml, ptype=self.ptype, body=self.body, tau_diag=wp.zeros(stress, dtype=v, device=dev),
+                      tau_off=wp.zeros(stress, dtype=v, device=dev), wall_acc=wp.zeros(n, dtype=v, device=dev))
         self.wall_acc = shared["wall_acc"]
         # the fixed obstacles' boxes: the health check's and the floating bodies' (at least one entry,
         # unread when there are none)
@@ -773,6 +776,11 @@ class Solver:
         self.params = self._make_params()
         self._graph.drop()
         self._view_fresh = False
+        if self.config.viscosity == "sps" and self.fields.tau_diag.shape[0] != self.n:
+            for name in ("tau_diag", "tau_off"):
+                stress = wp.zeros(self.n, dtype=self.vec, device=self.device)
+                setattr(self.fields, name, stress)
+                setattr(self._fields_h, name, stress)
 
     def resize_lists(self, width: int):
         """Neighbour lists ``width`` long, built before the next pass reads them; a captured step
