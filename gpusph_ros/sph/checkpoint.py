@@ -32,6 +32,8 @@ from .state import BOUNDARY, DT, DT_STABLE, EXCLUDED, FLUID, PASSIVE, TARGET, VA
 # host value is fixed by the configuration and the particles and must equal the live solver's
 CARRIED = {"solver": ("time", "dt", "dt_stable", "steps", "_excluded_host", "_census_host"),
            "neighbours": ("max_neighbours",)}
+# host values that say what a cache holds, not the state: never carried or compared
+TRANSIENT = ("_view_fresh",)
 KINDS = (FLUID, BOUNDARY, EXCLUDED, PASSIVE, VACANT)
 
 PLAIN = (bool, int, float, str, type(None), np.ndarray, np.generic)
@@ -95,7 +97,8 @@ def _copied(value):
 
 def _host(solver) -> dict:
     """{holder: {name: value}}: the plain host values a checkpoint holds."""
-    return {holder: {name: _copied(value) for name, value in vars(obj).items() if _plain(value)}
+    return {holder: {name: _copied(value) for name, value in vars(obj).items()
+                     if _plain(value) and name not in TRANSIENT}
             for holder, obj in (("solver", solver), ("neighbours", solver.neighbours))}
 
 
