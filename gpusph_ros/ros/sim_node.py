@@ -208,8 +208,6 @@ class SimNode(LifecycleNode):
         changes = {p.name: p.value for p in parameters if p.name in node_params.BY_NAME}
         if not changes:
             return SetParametersResult(successful=True)
-        # a check that raised (a refused record_dir among them) is an error only until one succeeds
-        self.internal_error = ""
         if self.session.state == "shut down":  # as the services: nothing more is taken
             return SetParametersResult(successful=False, reason=f"{', '.join(changes)}: the node is shut down "
                                                                 "(lifecycle state finalized); start a new one")
@@ -220,6 +218,7 @@ class SimNode(LifecycleNode):
         if reason:
             self.get_logger().warning(f"rejected {', '.join(changes)}: {reason}")
             return SetParametersResult(successful=False, reason=reason)
+        self.internal_error = ""  # as after a service that succeeds: a check that raised is past
         return SetParametersResult(successful=True)
 
     def set_parameters_atomically(self, parameter_list):
