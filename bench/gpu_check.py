@@ -10,7 +10,8 @@ limits add up to 9 min 40 s).
    walls, in its zone under multirate, and with a floating box; 2 cm, 0.1 s), digests compared;
 4. bench/solver.py on cuda:0 at about 10^5, 10^6, 4x10^6 and 10^7 particles of DamBreak 1, float32
    and float64 (MIPPS, neighbours, steps/s); a size the GPU's memory cannot hold is refused by the
-   build, named in the output, and the others go on;
+   build, named in the output, and the others go on; then at 10^6, float32, with neighbour lists
+   against walking the cells (the GPU's default, chosen for its memory: sph/neighbours.py);
 5. bench/node.py's cloud cost per output at about 10^6 particles on the GPU;
 6. DamBreak 1 of the experiment (dambreak1_lab, 0.30 m column) at dx = 1 cm to t = 1 s with
    gpusph-run, its real-time factor (wall time over simulated time, start-up included), and
@@ -59,7 +60,10 @@ def steps(device: str, out: Path) -> list:
         ("solver throughput, DamBreak 1",
          [py, str(BENCH / "solver.py"), "--device", device, "--particles",
           *(["1e4", "3e4"] if cpu else ["1e5", "1e6", "4e6", "1e7"]), "--seconds", "2" if cpu else "3"],
-         45 if cpu else 150),
+         45 if cpu else 120),
+        ("neighbour lists against walking the cells, DamBreak 1",
+         [py, str(BENCH / "solver.py"), "--device", device, "--particles", "1e4" if cpu else "1e6",
+          "--precision", "float32", "--search", "lists", "cells", "--seconds", "2" if cpu else "3"], 30),
         ("cloud cost per output",
          [py, str(BENCH / "node.py"), "cloud", "--device", device, "--particles", "1e4" if cpu else "1e6"], 40),
         (f"DamBreak 1 (0.30 m column) at {float(dx) * 100:g} cm: run",

@@ -320,7 +320,7 @@ def plan_main(argv=None):
     import warp as wp
 
     wp.config.log_level = wp.LOG_WARNING
-    from .plan import estimate, estimate_text, plan, plan_reductions, table, text
+    from .plan import coarse_plan, estimate, estimate_text, is_large, plan, plan_reductions, table, text
     from .scenes.schema import load_scene
     from .scenes.settings import resolve
     from .sph import ConfigError
@@ -330,6 +330,14 @@ def plan_main(argv=None):
         config = resolve(scene, files=args.run_config, sets=args.set)
         if args.estimate:
             print(estimate_text(estimate(scene, config)))
+            return 0
+        if is_large(scene, config):
+            e = coarse_plan(scene, config, args.calibration_steps)
+            print(estimate_text(e))
+            if e["fits"] is False:
+                print(f"gpusph-plan: dx = {e['dx']:g} m needs up to {e['particles']:.3g} particles, "
+                      f"{e['device_bytes'] / 2 ** 30:.3g} GiB on {e['device']}: {e['limit']}", file=sys.stderr)
+                return 1
             return 0
         if args.no_reductions:
             print(text(plan(scene, config, args.calibration_steps)))

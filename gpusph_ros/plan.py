@@ -11,7 +11,12 @@ the estimate is a lower bound (measured: 551 for 562 steps of the 2D collapse to
 A run larger than this machine, or for a device it does not have, is priced from the scene alone
 (``estimate``, ``gpusph-plan --estimate``): the particles the build would make at most, the memory
 they take on the device (scenes/resources.py, within a few percent of what a solver holds) and
-whether it is free there, and the fewest steps the sound speed allows; nothing is built.
+whether it is free there, with neighbour lists (a CPU's default) and walking the cells (a GPU's),
+and the fewest steps the sound speed allows; nothing is built. ``gpusph-plan`` prices so any run of
+more than LARGE particles, or on a device this machine lacks, and times the steps at a spacing
+coarse enough for CALIBRATION_PARTICLES on the device it runs on (``coarse_plan``): a 10^8-particle
+run is priced in seconds, where building it to time 30 steps would take longer than the answer is
+worth.
 
 With refinement zones the calibration prices the zones' particles as they stand at rest; fluid that
 flows into a zone later makes fine particles there, so the estimate is a lower bound again. A
@@ -20,6 +25,7 @@ spacing around each obstacle and probe (``proposed_zones``), printed as the ``re
 """
 import dataclasses
 import math
+import re
 import time
 
 import numpy as np
@@ -30,10 +36,16 @@ from .scenes import reduce, resources
 from .scenes.build import build_run, priced
 from .scenes.schema import parse_scene
 from .sph import ConfigError
+from .sph.config import NEIGHBOUR_SEARCHES
+from .sph.device import default_device
 
 # a proposed zone reaches this many of the scene's dx past an obstacle or a probe: more than a
 # coarse kernel support (2 h = 2.6 dx), so that the flow arriving there is fine before it does
 ZONE_MARGIN_DX = 4.0
+# a run of more particles is priced from its scene (coarse_plan), its steps timed at a spacing that
+# makes about CALIBRATION_PARTICLES
+LARGE = 2_000_000
+CALIBRATION_PARTICLES = 100_000
 
 
 def plan(scene, run_config, calibration_steps: int = 30) -> dict:
@@ -85,10 +97,45 @@ def estimate(scene, run_config) -> dict:
     dt = cfg.cfl * cfg.h / cfg.sound_speed
     steps = int(np.ceil(end / dt))
     fits = not limit if here else None
+    searches = [search for search in NEIGHBOUR_SEARCHES if search != "auto"]
     return {"scene": scene.name, "model": run_config.reduction.label, "dx": cfg.dx, "kernel": cfg.kernel,
             "precision": cfg.precision, "device": cfg.device, "particles": n, "device_bytes": need,
-            "fits": fits, "limit": limit.lstrip("; "), "end_time": end, "dt": dt, "steps": steps,
+            "search": "cells" if cfg.cell_walks else "lists",
+            "bytes_by_search": {search: resources.device_bytes(n, cfg.replace(neighbour_search=search))
+                                for search in searches},
+            "fits": fits, "limit": re.sub(r"^(; | and )", "", limit), "end_time": end, "dt": dt, "steps": steps,
             "particle_steps": n * steps}
+
+
+def coarse_plan(scene, run_config, calibration_steps: int = 30) -> dict:
+    """``estimate`` of the run, with the wall time its particle-steps take at the MIPPS that
+    ``plan`` measures at a spacing coarse enough for about CALIBRATION_PARTICLES, on the run's device
+    if this machine has it, else on this machine's (``calibration``: what was timed); nothing timed
+    where the run does not fit its device."""
+    e = estimate(scene, run_config)
+    if e["fits"] is False:
+        return e
+    cfg = run_config.solver
+    device = cfg.device if e["fits"] is not None else default_device()
+    # the particles scale as dx^-dim: the ratio's root; never finer than the run itself
+    dx = cfg.dx * max(1.0, e["particles"] / CALIBRATION_PARTICLES) ** (1.0 / scene.dim)
+    small = dataclasses.replace(run_config, numerics={**run_config.numerics, "dx": dx, "device": device},
+                                solver=cfg.replace(dx=dx, device=device))
+    timed = plan(scene, small, calibration_steps)
+    return {**e, "mipps": timed["mipps"], "wall_s": e["particle_steps"] / (timed["mipps"] * 1e6),
+            "calibration": {key: timed[key] for key in ("dx", "particles", "device", "calibration_steps",
+                                                        "calibration_wall_s")}}
+
+
+def is_large(scene, run_config) -> bool:
+    """Whether ``gpusph-plan`` prices the run from its scene (coarse_plan): more than LARGE particles,
+    or a device this machine does not have."""
+    if run_config.solver.device != "cpu":
+        try:
+            resources.device_free_bytes(run_config.solver.device)
+        except (RuntimeError, ValueError):
+            return True
+    return priced(scene, run_config)[2] > LARGE
 
 
 def estimate_text(e: dict) -> str:
@@ -98,16 +145,37 @@ def estimate_text(e: dict) -> str:
             verdict += f"; {e['limit']}"
     else:
         verdict = "fits" if e["fits"] else f"does not fit: {e['limit']}"
-    return "\n".join([
+    searches = "; ".join(f"{_SEARCHED[search]}: {b / 2 ** 30:.3g} GiB ({b / e['particles']:.0f} B a particle)"
+                         for search, b in e["bytes_by_search"].items())
+    lines = [
         f"{e['scene']} ({e['model']}): dx = {e['dx']:g} m, {e['kernel']} kernel, {e['precision']} on {e['device']} "
         "(estimated from the scene: nothing built)",
         f"particles    at most {e['particles']:,}",
         f"memory       {e['device_bytes'] / 2 ** 30:.3g} GiB on {e['device']} "
-        f"({e['device_bytes'] / e['particles']:.0f} B a particle): {verdict}",
+        f"({e['device_bytes'] / e['particles']:.0f} B a particle, {_SEARCHED[e['search']]}): {verdict}",
+        f"             {searches}",
         f"steps        at least {e['steps']:,} to t = {e['end_time']:g} s (dt <= cfl h / c0 = {e['dt']:.3g} s)",
-        f"cost         at least {e['particle_steps']:.3g} particle-steps: {e['particle_steps'] / 1e6:.3g} s "
-        f"of wall time at 1 MIPPS (gpusph-plan on the device measures its MIPPS)",
-    ])
+    ]
+    if "mipps" not in e:
+        return "\n".join(lines + [f"cost         at least {e['particle_steps']:.3g} particle-steps: "
+                                  f"{e['particle_steps'] / 1e6:.3g} s of wall time at 1 MIPPS (gpusph-plan on the "
+                                  f"device measures its MIPPS)"])
+    c = e["calibration"]
+    return "\n".join(lines + [
+        f"wall time    at least {_duration(e['wall_s'])}: {e['particle_steps']:.3g} particle-steps at "
+        f"{e['mipps']:.3g} MIPPS, measured on {c['device']} over {c['calibration_steps']} steps at dx = "
+        f"{c['dx']:.3g} m ({c['particles']:,} particles)"])
+
+
+_SEARCHED = {"lists": "with neighbour lists (a CPU's default)", "cells": "walking the cells (a GPU's default)"}
+
+
+def _duration(seconds: float) -> str:
+    if seconds < 120:
+        return f"{seconds:.3g} s"
+    if seconds < 7200:
+        return f"{seconds / 60:.3g} min"
+    return f"{seconds / 3600:.3g} h"
 
 
 def plan_reductions(scene, run_config, calibration_steps: int = 30) -> tuple:

@@ -52,10 +52,13 @@ KINDS = ("unit", "physics", "ros", "study")
 
 def planned_bytes(solver) -> int:
     """The solver's device memory with its lists as wide as the plan prices them (the lattice's
-    estimate, resources.device_bytes); it measures its own lists, narrower (sph/neighbours.py)."""
+    estimate, resources.device_bytes); it measures its own lists, narrower (sph/neighbours.py). A
+    solver that walks the cells holds no lists."""
     from gpusph_ros.sph.neighbours import default_max_neighbours
 
     cfg = solver.config
+    if solver.neighbours.cells:
+        return solver.device_bytes()
     width = default_max_neighbours(cfg.dim, cfg.hdx, solver.finest, solver.params.coarse_stride)
     return solver.device_bytes() + 4 * solver.n * (width - solver.neighbours.max_neighbours)
 

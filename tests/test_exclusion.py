@@ -104,7 +104,7 @@ def test_an_excluded_particle_is_nobodys_neighbour():
     cfg, parts = collapse()
     (i,) = middle_fluid(parts)
     break_density(cfg, parts, i)
-    solver = Solver(cfg, parts)
+    solver = Solver(cfg.replace(neighbour_search="lists"), parts)
     solver.step()
     solver.neighbours.rebuild(solver.pos, force=True)
     nl = solver.neighbours

@@ -44,7 +44,7 @@ def test_defaults_describe_a_run():
     ({"sps": True}, ["sps", "laminar", "'artificial'"]),
     ({"boundary": "planes"}, ["boundary", "lennard_jones, monaghan_kajtar, dynamic"]),
     ({"dx": 0.0}, ["dx", "[0.0001, 10]"]),
-    ({"dx": 1.0e-4}, ["dx: 0.0001", "a coarser spacing", "max_particles is 50,000,000"]),  # was left pending
+    ({"dx": 1.0e-4}, ["dx: 0.0001", "a coarser spacing", "max_particles is 200,000,000"]),  # was left pending
     ({"cfl": 1.5}, ["cfl", "[0.01, 1]"]),
     ({"device": "cuda:7"}, ["device", "'cuda:7'", "cpu"]),
     ({"scene": "no_such_scene"}, ["scene", "no_such_scene", "dambreak1_thesis"]),

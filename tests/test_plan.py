@@ -1,6 +1,8 @@
 """gpusph-plan (gpusph_ros.plan): the particle count is the scene's, the memory is what the solver
 holds, and the step estimate from a calibration at rest is a lower bound close to the real count.
 An estimate from the scene alone prices 2 x 10^7 particles with their memory."""
+import re
+
 import numpy as np
 import pytest
 import warp as wp
@@ -75,7 +77,9 @@ def test_the_cli_refuses_a_run_the_machine_cannot_hold_with_its_numbers():
     out = subprocess.run([sys.executable, "-m", "gpusph_ros.cli", "plan", "dambreak1_lab", "--set", "dx=0.0005"],
                          capture_output=True, text=True, timeout=300)
     assert out.returncode == 1 and "Traceback" not in out.stderr, out.stderr
-    assert "gpusph-plan: dx: 0.0005 is not allowed" in out.stderr and "particles" in out.stderr, out.stderr
+    assert re.search(r"gpusph-plan: dx = 0.0005 m needs up to 7.87e\+08 particles, \d+ GiB on cpu: max_particles is",
+                     out.stderr), out.stderr
+    assert "MIPPS, measured on" not in out.stdout and "walking the cells" in out.stdout
 
 
 def test_an_estimate_prices_a_run_from_the_scene_alone():
@@ -105,8 +109,9 @@ def test_20_million_particles_are_priced_with_their_memory_and_refused_for_it(mo
     words = estimate_text(e)
     assert "GiB on cpu" in words and "does not fit" in words and "particle-steps" in words
     gpu = estimate(scene, resolve(scene, dx=0.00177, end_time=0.5, device="cuda:0"))
-    # a GPU this machine lacks: its free memory unknown, the rest priced the same
-    assert gpu["particles"] == e["particles"] and gpu["device_bytes"] == e["device_bytes"]
+    # a GPU this machine lacks: its free memory unknown, the same particles, walking the cells (no lists)
+    assert gpu["particles"] == e["particles"] and gpu["search"] == "cells" and e["search"] == "lists"
+    assert gpu["device_bytes"] == e["bytes_by_search"]["cells"] < e["device_bytes"] / 4
     assert (gpu["fits"] is None) == (wp.get_cuda_device_count() == 0)
     with pytest.raises(ConfigError, match="host memory") as err:
         build(scene, **config.numerics)
@@ -135,3 +140,25 @@ def test_a_zoned_scene_lists_the_reductions_that_cannot_carry_its_zones(tmp_path
     assert [p["model"] for p in plans] == ["full", "no zones"]
     assert "refinement zones (refine:) are not carried" in not_applicable["wall_planes"]
     assert plans[0]["particles"] > plans[1]["particles"] and "not applicable" in table(plans, not_applicable)
+
+
+def test_10_to_the_8_particles_are_priced_from_the_scene_with_the_step_rate_of_this_device(capsys):
+    """DamBreak 1's laboratory tank at 1 mm, about 10^8 particles: gpusph-plan builds nothing of it.
+    On a GPU (the cells walked, no lists) it needs under 45 GiB; with lists, over four times that, which
+    this machine does not hold: a refusal naming memory. The wall time follows from the MIPPS timed
+    here at a spacing coarse enough for about 10^5 particles."""
+    from gpusph_ros.cli import plan_main
+
+    assert plan_main(["dambreak1_lab", "--set", "dx=0.001", "--set", "device=cuda:0",
+                      "--calibration-steps", "3"]) == 0 or wp.get_cuda_device_count() > 0
+    gpu = capsys.readouterr().out
+    particles = int(re.search(r"particles +at most ([\d,]+)", gpu).group(1).replace(",", ""))
+    memory = float(re.search(r"memory +([\d.]+) GiB on cuda:0 \(\d+ B a particle, walking the cells", gpu).group(1))
+    assert 0.95e8 < particles < 1.1e8 and memory < 45
+    timed = re.search(r"wall time +at least .*: ([\d.e+]+) particle-steps at ([\d.]+) MIPPS, measured on cpu over \d+ "
+                      r"steps at dx = [\d.]+ m \(([\d,]+) particles\)", gpu)
+    assert timed and 5e4 < int(timed.group(3).replace(",", "")) < 5e5
+    assert plan_main(["dambreak1_lab", "--set", "dx=0.001", "--calibration-steps", "3"]) == 1
+    cpu = capsys.readouterr()
+    assert re.search(r"GiB on cpu \(\d+ B a particle, with neighbour lists.*\): does not fit: .*host memory", cpu.out)
+    assert "gpusph-plan: dx = 0.001 m needs up to 1.03e+08 particles" in cpu.err and "host memory" in cpu.err

@@ -4,10 +4,12 @@ host, so that a spacing a thousand times too fine is refused with the numbers in
 exhausting the machine.
 
 Memory per particle (measured with ``Solver.device_bytes`` on DamBreak 1 and the 2D collapse, and
-checked by the tests): the neighbour list, 4 bytes x ``default_max_neighbours`` (248 in 3D, 72 in
-2D at h = 1.3 dx: the most a run's lists may widen to; the solver measures its own, narrower at the
-start, sph/neighbours.py), and 58 scalars of state, half-step, candidate and scratch arrays plus 60
-bytes of integers. Building the particles on the host takes about HOST_BYTES a particle more.
+checked by the tests): 54 scalars of state, half-step, candidate and scratch arrays plus 52 bytes of
+integers, and what the neighbour search holds (``config.cell_walks``): with lists, the list, 4 bytes
+x ``default_max_neighbours`` (248 in 3D, 72 in 2D at h = 1.3 dx: the most a run's lists may widen
+to; the solver measures its own, narrower at the start, sph/neighbours.py), its count and the sorted
+copies its build reads (4 scalars, 8 bytes); without, the kinds, h and needs as of the last sort
+(1 scalar, 8 bytes). Building the particles on the host takes about HOST_BYTES a particle more.
 Refinement zones are counted exactly as they are split, each level before it is made
 (``check_count``, from refine.split), with the wider lists a refined run holds.
 """
@@ -21,7 +23,9 @@ from ..sph.neighbours import default_max_neighbours
 from .boxes import cells
 
 HOST_BYTES = 200  # numpy arrays of the particle set and the lattice fills, per particle
-_SCALARS, _INTEGER_BYTES = 58, 60
+_SCALARS, _INTEGER_BYTES = 54, 52
+_LIST_SCALARS, _LIST_INTEGER_BYTES = 4, 8  # the sorted positions and h, the sorted kinds and the count
+_WALK_SCALARS, _WALK_INTEGER_BYTES = 1, 8  # h, the kinds and the needs as of the sort
 _STRESS = 6  # of the scalars: the SPS stress, held only under viscosity sps
 _LEVEL_BYTES = 20  # with zones: the levels' spawn and free-slot bookkeeping (sph/levels.py)
 USABLE = 0.9  # of the free memory a run may plan to take
@@ -70,7 +74,10 @@ def device_bytes(n: int, cfg: SolverConfig, refined: bool = False) -> int:
     integers = _INTEGER_BYTES + (_LEVEL_BYTES if refined else 0)
     substeps = coarse_stride(cfg, refined)
     scalars = _SCALARS - (0 if cfg.viscosity == "sps" else _STRESS)
-    return n * (4 * default_max_neighbours(cfg.dim, cfg.hdx, finest, substeps) + scalars * scalar + integers)
+    if cfg.cell_walks:
+        return n * ((scalars + _WALK_SCALARS) * scalar + integers + _WALK_INTEGER_BYTES)
+    lists = 4 * default_max_neighbours(cfg.dim, cfg.hdx, finest, substeps)
+    return n * (lists + (scalars + _LIST_SCALARS) * scalar + integers + _LIST_INTEGER_BYTES)
 
 
 def host_free_bytes() -> int:

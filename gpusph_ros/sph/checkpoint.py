@@ -77,9 +77,22 @@ NOT_STORED = ("neighbours.nbr", "neighbours._pos_sorted", "neighbours._ptype_sor
 LISTS = "neighbours.nbr_used"
 
 
+# the lists are packed this many rows at a time: a mask of the whole n x width lists would be 1.7 GB
+# of host memory at 10^7 particles, more than the packed lists themselves
+PACKED_ROWS = 1 << 16
+
+
 def _used(width: int, count) -> np.ndarray:
     """Which entries of lists ``width`` wide (n x width) hold a neighbour."""
     return np.arange(width)[None, :] < np.asarray(count)[:, None]
+
+
+def _packed(nbr: wp.array, count: np.ndarray) -> np.ndarray:
+    """The entries of the lists ``nbr`` that hold a neighbour, row after row, read PACKED_ROWS rows
+    at a time (from a GPU, each block copied on its own)."""
+    n, width = nbr.shape
+    blocks = [(i, min(i + PACKED_ROWS, n)) for i in range(0, n, PACKED_ROWS)]
+    return np.concatenate([nbr[a:b].numpy()[_used(width, count[a:b])] for a, b in blocks])
 
 
 def _width(state) -> "int | None":
@@ -111,7 +124,8 @@ def capture(solver) -> dict:
     wp.synchronize_device(solver.device)
     arrays = {path: a.numpy().copy() for path, a in _stored(solver).items()}
     nl = solver.neighbours
-    arrays[LISTS] = nl.nbr.numpy()[_used(nl.max_neighbours, arrays["neighbours.count"])]
+    if not nl.cells:
+        arrays[LISTS] = _packed(nl.nbr, arrays["neighbours.count"])
     return {"arrays": arrays, "host": _host(solver)}
 
 
@@ -208,8 +222,9 @@ def mismatch(solver, state) -> str:
     if not (isinstance(state, dict) and isinstance(state.get("arrays"), dict) and isinstance(state.get("host"), dict)):
         return "it holds no arrays and host values"
     arrays = _stored(solver)
-    if set(arrays) | {LISTS} != set(state["arrays"]):
-        return "its arrays are not this solver's: " + ", ".join(sorted((set(arrays) | {LISTS}) ^ set(state["arrays"])))
+    names = set(arrays) | (set() if solver.neighbours.cells else {LISTS})
+    if names != set(state["arrays"]):
+        return "its arrays are not this solver's: " + ", ".join(sorted(names ^ set(state["arrays"])))
     for path, target in arrays.items():
         data = state["arrays"][path]
         shape, dtype = layout(target)
@@ -220,21 +235,9 @@ def mismatch(solver, state) -> str:
         if any(f.dtype.kind == "f" and (np.isnan(f).any() or (path != "solver._clock" and np.isinf(f).any()))
                for f in _fields(data)):
             return f"{path} holds a value that is not finite"
-    problem = _indices(solver, state["arrays"])
+    problem = _indices(solver, state["arrays"]) or _lists(solver, state)
     if problem:
         return problem
-    nl, count, width = solver.neighbours, state["arrays"]["neighbours.count"], _width(state)
-    if width is None:
-        return "it holds no width of its neighbour lists (neighbours.max_neighbours)"
-    widest = solver._widest if solver._measured_width else nl.max_neighbours
-    if width > widest:
-        return f"its neighbour lists are {width} wide, more than this solver's {widest}"
-    if count.min(initial=0) < 0 or count.max(initial=0) > width:
-        return f"neighbours.count lies outside [0, {width}]"
-    lists, used = state["arrays"][LISTS], int(count.sum())
-    if not (isinstance(lists, np.ndarray) and lists.dtype == np.int32 and lists.shape == (used,)
-            and 0 <= lists.min(initial=0) <= lists.max(initial=0) < nl.n):
-        return f"{LISTS} is not {used} indices of this solver's {nl.n} particles"
     for holder, values in _host(solver).items():
         given = state["host"].get(holder)
         if not isinstance(given, dict) or set(given) != set(values):
@@ -246,6 +249,27 @@ def mismatch(solver, state) -> str:
             elif not _equal(live, given[name]):
                 return f"its {holder} value {name} differs from this solver's: the state is of another run"
     return _values(solver, state["arrays"], state["host"])
+
+
+def _lists(solver, state) -> str:
+    """What in ``state``'s neighbour lists does not fit ``solver``'s, or "" (none where it walks the
+    cells)."""
+    nl = solver.neighbours
+    if nl.cells:
+        return ""
+    count, width = state["arrays"]["neighbours.count"], _width(state)
+    if width is None:
+        return "it holds no width of its neighbour lists (neighbours.max_neighbours)"
+    widest = solver._widest if solver._measured_width else nl.max_neighbours
+    if width > widest:
+        return f"its neighbour lists are {width} wide, more than this solver's {widest}"
+    if count.min(initial=0) < 0 or count.max(initial=0) > width:
+        return f"neighbours.count lies outside [0, {width}]"
+    lists, used = state["arrays"][LISTS], int(count.sum())
+    if not (isinstance(lists, np.ndarray) and lists.dtype == np.int32 and lists.shape == (used,)
+            and 0 <= lists.min(initial=0) <= lists.max(initial=0) < nl.n):
+        return f"{LISTS} is not {used} indices of this solver's {nl.n} particles"
+    return ""
 
 
 def fingerprint(state: dict) -> dict:
@@ -274,13 +298,14 @@ def put(solver, state: dict):
     width = _width(state)
     staged = {path: wp.array(state["arrays"][path], dtype=target.dtype, device=target.device)
               for path, target in _stored(solver).items()}
-    if width != nl.max_neighbours:
+    if width != nl.max_neighbours and not nl.cells:
         solver.resize_lists(width)
     for path, target in _stored(solver).items():
         wp.copy(target, staged[path])
-    lists = np.array(nl.nbr.numpy())
-    lists[_used(width, state["arrays"]["neighbours.count"])] = state["arrays"][LISTS]
-    nl.nbr.assign(lists)
+    if not nl.cells:
+        lists = np.array(nl.nbr.numpy())
+        lists[_used(width, state["arrays"]["neighbours.count"])] = state["arrays"][LISTS]
+        nl.nbr.assign(lists)
     for holder, obj in (("solver", solver), ("neighbours", nl)):
         for name, value in state["host"][holder].items():
             setattr(obj, name, value)

@@ -24,11 +24,12 @@ MDBC_SLIPS = boundaries.mdbc.SLIPS
 DENSITY_DIFFUSIONS = density.DIFFUSIONS
 PRECISIONS = ("float32", "float64")
 STEP_GRAPHS = graph.STEP_GRAPHS
+NEIGHBOUR_SEARCHES = ("auto", "lists", "cells")
 
 # guards against runs that could never finish or never fit (docs/limits.md)
 MIN_CFL = 0.01  # a smaller Courant number takes > 100x the steps of the default for no accuracy
 MIN_DT_FIXED = 1.0e-6  # [s] a fixed step below this is a million steps per simulated second
-MAX_PARTICLES = 50_000_000  # default cap on a run's particles (max_particles)
+MAX_PARTICLES = 200_000_000  # default cap on a run's particles (max_particles): 10^8 with room
 _SHOWN = 240  # characters of a refused value quoted in an error (a long path fits)
 
 
@@ -210,6 +211,10 @@ class Numerics:
                              applies=RESET, node=True)
     device: str = setting(None, "Warp device: cpu or cuda:N", applies=RESET, node=True, factory=default_device)
     cpu_threads: int = setting(0, "threads for the heavy passes on a CPU device; 0 = every core", applies=RESET)
+    neighbour_search: str = setting("auto", "how a pass finds a particle's neighbours (sph/neighbours.py): lists "
+                                            "(a list per particle, 4 B an entry: faster on a CPU), cells (no "
+                                            "lists: each pass walks the cells around it), auto (cells on a GPU, "
+                                            "lists on a CPU)", choices=NEIGHBOUR_SEARCHES, applies=RESET)
     step_graph: str = setting("auto", "replay the step loop from a captured graph (sph/graph.py): auto (on a GPU "
                                       "and on one CPU thread; on more, the eager loop spreads the heavy passes over "
                                       "them), on, off",
@@ -261,6 +266,13 @@ class SolverConfig(Numerics, HealthLimits, Domain):
     def free_surface_threshold(self) -> float:
         """shift_tfs, or DualSPHysics' value for the dimension."""
         return self.shift_tfs or (1.5 if self.dim == 2 else 2.75)
+
+    @property
+    def cell_walks(self) -> bool:
+        """Whether the passes walk the cells (no neighbour lists): neighbour_search, auto on a GPU."""
+        if self.neighbour_search == "auto":
+            return str(self.device).startswith("cuda")
+        return self.neighbour_search == "cells"
 
     @property
     def eos_b(self) -> float:

@@ -39,6 +39,7 @@ def build(scalar):
     Params, Fields = S.Params, S.Fields
     N = neighbours.grid(scalar)
     Grid, separation = N.Grid, N.separation
+    Walk, walk_from, walk_cells, walk_span, walk_at = N.Walk, N.walk_from, N.walk_cells, N.walk_span, N.walk_at
 
     @wp.func
     def continuity(m_b: scalar, u_ab: vec, grad: vec) -> scalar:
@@ -55,7 +56,7 @@ def build(scalar):
         return delta_hc0 * psi * m_b / rho_b
 
     @wp.func
-    def shepard(p: Params, grid: Grid, nbr: wp.array2d(dtype=wp.int32), count: wp.array(dtype=wp.int32), i: int,
+    def shepard(p: Params, grid: Grid, nb: Walk, i: int,
                 f: Fields) -> scalar:
         """The Shepard density of particle i over its neighbour list (the walls' particles too
         where they carry a fluid volume)."""
@@ -63,16 +64,20 @@ def build(scalar):
         w0 = kernel_w(p.kernel, norm, inv_h, scalar(0.0))
         num = f.mass[i] * w0
         den = f.mass[i] / f.rho[i] * w0
-        for k in range(count[i]):
-            j = nbr[i, k]
-            # the lists may still hold a particle excluded this step
-            t_j = f.ptype[j]
-            if (state.carries_fluid(t_j) or (p.wall_volume != 0 and t_j == BOUNDARY)) \
-                    and same_level(p, f.hsml[i], f.hsml[j]):
-                h, inv_h, norm, scale = smoothing(p, f.hsml[i], f.hsml[j])
-                wk = kernel_w(p.kernel, norm, inv_h, wp.length(separation(grid, f.pos[i], f.pos[j])))
-                num += f.mass[j] * wk
-                den += f.mass[j] / f.rho[j] * wk
+        cell_i, reach_i = walk_from(grid, nb, i)
+        for w in range(walk_cells(reach_i)):
+            span = walk_span(grid, nb, i, cell_i, reach_i, w)
+            for slot in range(span[0], span[1]):
+                j = walk_at(grid, nb, i, slot)
+                if j >= 0:
+                    # the lists may still hold a particle excluded this step
+                    t_j = f.ptype[j]
+                    if (state.carries_fluid(t_j) or (p.wall_volume != 0 and t_j == BOUNDARY)) \
+                            and same_level(p, f.hsml[i], f.hsml[j]):
+                        h, inv_h, norm, scale = smoothing(p, f.hsml[i], f.hsml[j])
+                        wk = kernel_w(p.kernel, norm, inv_h, wp.length(separation(grid, f.pos[i], f.pos[j])))
+                        num += f.mass[j] * wk
+                        den += f.mass[j] / f.rho[j] * wk
         return num / den
 
     return SimpleNamespace(continuity=continuity, delta_diffusion=delta_diffusion, shepard=shepard)

@@ -109,7 +109,9 @@ def build(scalar):
     no_sums, corrected_term, corrected_density = interp.no_sums, interp.corrected_term, interp.corrected_density
     K = kernels.build(scalar)
     same_level, finest_level = K.same_level, K.finest_level
-    Grid = neighbours.grid(scalar).Grid
+    N = neighbours.grid(scalar)
+    Grid = N.Grid
+    Walk, walk_from, walk_cells, walk_span, walk_at = N.Walk, N.walk_from, N.walk_cells, N.walk_span, N.walk_at
     S = state.build(scalar)
     Params, Fields = S.Params, S.Fields
 
@@ -154,7 +156,7 @@ def build(scalar):
         return finer, own, child
 
     @wp.kernel(enable_backward=False, module="unique")
-    def passive_state(p: Params, grid: Grid, nbr: wp.array2d(dtype=wp.int32), count: wp.array(dtype=wp.int32),
+    def passive_state(p: Params, grid: Grid, nb: Walk,
                       f: Fields, zone_lo: wp.array(dtype=vec), zone_hi: wp.array(dtype=vec),
                       zone_h: wp.array(dtype=scalar), level_h: scalar, chunk: int, stride: int):
         """Each passive particle of the level of smoothing length ``level_h``: its density (first
@@ -170,16 +172,20 @@ def build(scalar):
             return
         x = f.pos[i]
         a, rhs, u = no_sums()
-        for k in range(count[i]):
-            j = nbr[i, k]
-            h_j = f.hsml[j]
-            donor = f.ptype[j] == FLUID and not same_level(p, h_i, h_j)
-            if f.ptype[j] == PASSIVE and h_j < h_i * scalar(0.999) and not finest_level(p, h_j):
-                # (the finest level has no zone finer still)
-                finer, own, child = place(p, f.pos[j], h_j, zone_lo, zone_hi, zone_h)
-                donor = finer == 1
-            if donor:
-                a, rhs, u = corrected_term(p, grid, f, x, h_i, j, a, rhs, u)
+        cell_i, reach_i = walk_from(grid, nb, i)
+        for w in range(walk_cells(reach_i)):
+            span = walk_span(grid, nb, i, cell_i, reach_i, w)
+            for slot in range(span[0], span[1]):
+                j = walk_at(grid, nb, i, slot)
+                if j >= 0:
+                    h_j = f.hsml[j]
+                    donor = f.ptype[j] == FLUID and not same_level(p, h_i, h_j)
+                    if f.ptype[j] == PASSIVE and h_j < h_i * scalar(0.999) and not finest_level(p, h_j):
+                        # (the finest level has no zone finer still)
+                        finer, own, child = place(p, f.pos[j], h_j, zone_lo, zone_hi, zone_h)
+                        donor = finer == 1
+                    if donor:
+                        a, rhs, u = corrected_term(p, grid, f, x, h_i, j, a, rhs, u)
         if a[0, 0] > scalar(0.0):
             f.rho[i] = wp.clamp(corrected_density(p, a, rhs, h_i), p.rho_min, p.rho_max)
             f.vel[i] = u / a[0, 0]

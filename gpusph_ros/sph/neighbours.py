@@ -1,7 +1,18 @@
 """Neighbour search: a uniform grid of cells one list radius wide, built by a sort of cell keys
-(Warp's radix sort), then one fixed-width neighbour list per particle (as GPUSPH keeps). Every
-later pass of the step loops over that list only. (Half-width cells searched two each way test
-40% fewer candidates but visit 125 cells instead of 27, and measured slower on a CPU.)
+(Warp's radix sort), then either one fixed-width neighbour list per particle (as GPUSPH keeps) or
+no list at all, every pass walking the cells around a particle (as DualSPHysics does). Every pass
+meets a particle's neighbours through one walk (``Walk``: walk_from, walk_cells, walk_span,
+walk_at), whichever the search. (Half-width cells searched two each way test 40% fewer candidates
+but visit 125 cells instead of 27, and measured slower on a CPU.)
+
+Lists cost 4 B an entry, 168 entries a particle in 3D (of 937 B a particle on DamBreak 1), and are
+read by each pass at one index a neighbour; walks hold nothing (253 B a particle) and test every
+candidate of the 27 cells, about 6 times the listed pairs, in each pass: 2.5 times the time on a CPU,
+where the lists are the default; on a GPU, where memory bounds the run, the walks are
+(``config.cell_walks``; docs/results/speed.md). A walk tests each candidate as the lists' build
+does, on the particles as they stood at the last sort (their positions, kinds, h and whether they
+need a list, copied then), so it meets the pairs a list would hold, in its order: a run steps bit
+for bit the same either way.
 
 The lists reach list_skin x the kernel support and are Verlet lists: they are rebuilt only once
 some particle, where the next step's force passes will read it, would be more than half the skin
@@ -172,8 +183,115 @@ def grid(scalar):
         return neighbour_cell(grid, ci, k % side - grid.reach, (k / side) % side - grid.reach,
                               k / (side * side) - grid.reach_z)
 
+    @wp.func
+    def search_reach(grid: Grid, h_i: scalar, passive_i: bool, off: vec) -> wp.vec3i:
+        """The cells a particle searches each way: one list radius of its own h (a passive one, the
+        largest's), and of its ghost node's, ``off`` from it (mdbc.py; zero otherwise)."""
+        reach = wp.vec3i(grid.reach, grid.reach, grid.reach_z)
+        if grid.variable != 0 and not passive_i:
+            # the cells are one smallest list radius wide; the tolerance keeps an exact ratio of 2
+            # from rounding up to 3
+            r_own = int(wp.ceil(h_i * grid.inv_h_min - scalar(1.0e-4)))
+            reach = wp.vec3i(r_own, r_own, wp.min(r_own, grid.reach_z))
+        if wp.dot(off, off) > scalar(0.0):
+            # cells are at least a list radius wide: reach the ghost's list radius as well (on a
+            # periodic axis no further than the cells that are there, each visited once)
+            for ax in range(3):
+                if ax < 2 or grid.reach_z > 0:
+                    r_ax = reach[ax] + int(wp.ceil(wp.abs(off[ax]) * grid.inv_cell[ax]))
+                    if grid.periodic[ax] != 0:
+                        r_ax = wp.min(r_ax, (grid.dims[ax] - 1) / 2)
+                    reach[ax] = r_ax
+        return reach
+
+    @wp.func
+    def listed(grid: Grid, t_i: int, t_k: int, h_i: scalar, h_k: scalar, r: vec, off: vec) -> bool:
+        """Whether particle k, at ``r`` from particle i (x_i - x_k), is i's neighbour: within the
+        list radius of i or, for a boundary particle with a ghost node (``off`` from it), of that
+        node. A boundary particle needs only its fluid neighbours (active or passive); an excluded
+        particle is nobody's neighbour; with levels a particle needs its own level's (a passive one
+        too: it may turn active before the next build), a passive one its donors too: the
+        neighbouring levels' active fluid and the next finer level's passive fluid
+        (levels.passive_state), each pair within the list radius of its own h_ab."""
+        ok = carries_fluid(t_k) or (carries_fluid(t_i) and t_k == BOUNDARY)
+        radius2 = grid.radius2
+        if ok and grid.variable != 0:
+            if h_i != h_k:
+                ok = t_i == PASSIVE and adjacent_levels(h_i, h_k) and (t_k == FLUID or (t_k == PASSIVE and h_k < h_i))
+            h_ab = scalar(0.5) * (h_i + h_k)
+            radius2 = radius2 * h_ab * h_ab * grid.inv_h2
+        if ok:
+            ok = wp.dot(r, r) < radius2
+            if not ok and wp.dot(off, off) > scalar(0.0):
+                rg = r + off
+                ok = wp.dot(rg, rg) < radius2
+        return ok
+
+    @wp.struct
+    class Walk:
+        """What a pass walks to find a particle's neighbours (``walk_from``, ``walk_cells``,
+        ``walk_span``, ``walk_at``): its list or, without lists (``cells`` 1), the cells around
+        it as of the last sort, each candidate tested as the lists' build tests it, on the
+        particles as they were at that build (positions, kinds, h, whether they need a list: the
+        ``*_built`` copies): the pairs a list would hold, in its order."""
+        cells: int
+        nbr: wp.array2d(dtype=wp.int32)
+        count: wp.array(dtype=wp.int32)
+        start: wp.array(dtype=wp.int32)
+        end: wp.array(dtype=wp.int32)
+        order: wp.array(dtype=wp.int32)
+        x_build: wp.array(dtype=vec)
+        ptype: wp.array(dtype=wp.int32)
+        hsml: wp.array(dtype=scalar)
+        ghost: wp.array(dtype=vec)
+        needs_list: wp.array(dtype=wp.int32)
+
+    @wp.func
+    def walk_from(grid: Grid, nb: Walk, i: int):
+        """(the cell of particle i at the last build, the cells its walk reaches each way): a
+        list is one span (reach 0); a particle that needs no list walks nothing (reach -1)."""
+        zero = wp.vec3i(0, 0, 0)
+        if nb.cells == 0:
+            return zero, zero
+        if nb.needs_list[i] == 0:
+            return zero, wp.vec3i(-1, 0, 0)
+        return cell_coord(grid, nb.x_build[i]), search_reach(grid, nb.hsml[i], nb.ptype[i] == PASSIVE, nb.ghost[i])
+
+    @wp.func
+    def walk_cells(reach: wp.vec3i) -> int:
+        """How many spans a walk of ``reach`` (walk_from) has."""
+        if reach[0] < 0:
+            return 0
+        return (2 * reach[0] + 1) * (2 * reach[1] + 1) * (2 * reach[2] + 1)
+
+    @wp.func
+    def walk_span(grid: Grid, nb: Walk, i: int, ci: wp.vec3i, reach: wp.vec3i, c: int) -> wp.vec2i:
+        """The slots [lo, hi) of span c of particle i's walk: its list's entries, or the sorted
+        slots of cell c of those around ci (x fastest, then y, then z: the lists' order)."""
+        if nb.cells == 0:
+            return wp.vec2i(0, nb.count[i])
+        sx = 2 * reach[0] + 1
+        sy = 2 * reach[1] + 1
+        cell = neighbour_cell(grid, ci, c % sx - reach[0], (c / sx) % sy - reach[1], c / (sx * sy) - reach[2])
+        if cell < 0:
+            return wp.vec2i(0, 0)
+        return wp.vec2i(nb.start[cell], nb.end[cell])
+
+    @wp.func
+    def walk_at(grid: Grid, nb: Walk, i: int, s: int) -> int:
+        """The neighbour in slot s of particle i's walk, or -1 where that slot holds none."""
+        if nb.cells == 0:
+            return nb.nbr[i, s]
+        j = nb.order[s]
+        if j == i or not listed(grid, nb.ptype[i], nb.ptype[j], nb.hsml[i], nb.hsml[j],
+                                separation(grid, nb.x_build[i], nb.x_build[j]), nb.ghost[i]):
+            return -1
+        return j
+
     return SimpleNamespace(Grid=Grid, separation=separation, cell_coord=cell_coord, neighbour_cell=neighbour_cell,
-                           cells_around=cells_around, cell_around=cell_around, adjacent_levels=adjacent_levels)
+                           cells_around=cells_around, cell_around=cell_around, adjacent_levels=adjacent_levels,
+                           search_reach=search_reach, listed=listed, Walk=Walk, walk_from=walk_from,
+                           walk_cells=walk_cells, walk_span=walk_span, walk_at=walk_at)
 
 
 @functools.lru_cache(maxsize=None)
@@ -183,7 +301,8 @@ def build(scalar):
     vec = wp.types.vector(3, scalar)
     G = grid(scalar)
     Grid, separation, cell_coord, neighbour_cell = G.Grid, G.separation, G.cell_coord, G.neighbour_cell
-    adjacent_levels = G.adjacent_levels
+    search_reach, listed = G.search_reach, G.listed
+    Walk, walk_from, walk_cells, walk_span, walk_at = G.Walk, G.walk_from, G.walk_cells, G.walk_span, G.walk_at
 
     @wp.kernel(enable_backward=False, module="unique")
     def cell_keys(grid: Grid, pos: wp.array(dtype=vec), ptype: wp.array(dtype=wp.int32),
@@ -263,27 +382,12 @@ def build(scalar):
         if needs_list[i] == 0:
             count[i] = 0
             return
-        fluid_i = carries_fluid(ptype_sorted[ki])
-        passive_i = ptype_sorted[ki] == PASSIVE
+        t_i = ptype_sorted[ki]
+        h_i = hsml_sorted[ki]
         xi = pos_sorted[ki]
         off = ghost[i]
-        two_centres = wp.dot(off, off) > scalar(0.0)
         ci = cell_coord(grid, xi)
-        reach = wp.vec3i(grid.reach, grid.reach, grid.reach_z)
-        if grid.variable != 0 and not passive_i:
-            # the cells are one smallest list radius wide; the tolerance keeps an exact ratio of 2
-            # from rounding up to 3
-            r_own = int(wp.ceil(hsml_sorted[ki] * grid.inv_h_min - scalar(1.0e-4)))
-            reach = wp.vec3i(r_own, r_own, wp.min(r_own, grid.reach_z))
-        if two_centres:
-            # cells are at least a list radius wide: reach the ghost's list radius as well (on a
-            # periodic axis no further than the cells that are there, each visited once)
-            for ax in range(3):
-                if ax < 2 or grid.reach_z > 0:
-                    r_ax = reach[ax] + int(wp.ceil(wp.abs(off[ax]) * grid.inv_cell[ax]))
-                    if grid.periodic[ax] != 0:
-                        r_ax = wp.min(r_ax, (grid.dims[ax] - 1) / 2)
-                    reach[ax] = r_ax
+        reach = search_reach(grid, h_i, t_i == PASSIVE, off)
         n = int(0)
         for dz in range(-reach[2], reach[2] + 1):
             for dy in range(-reach[1], reach[1] + 1):
@@ -291,33 +395,11 @@ def build(scalar):
                     cell = neighbour_cell(grid, ci, dx, dy, dz)
                     if cell >= 0:
                         for k in range(start[cell], end[cell]):
-                            # a boundary particle needs only its fluid neighbours (active or
-                            # passive); an excluded particle is nobody's neighbour; with levels
-                            # a particle needs its own level's (a passive one too: it may turn
-                            # active before the next build), a passive one its donors too: the
-                            # neighbouring levels' active fluid and the next finer level's passive
-                            # fluid (levels.passive_state)
-                            t_k = ptype_sorted[k]
-                            listed = k != ki and (carries_fluid(t_k) or (fluid_i and t_k == BOUNDARY))
-                            radius2 = grid.radius2
-                            if listed and grid.variable != 0:
-                                h_i = hsml_sorted[ki]
-                                h_k = hsml_sorted[k]
-                                if h_i != h_k:
-                                    listed = passive_i and adjacent_levels(h_i, h_k) \
-                                        and (t_k == FLUID or (t_k == PASSIVE and h_k < h_i))
-                                h_ab = scalar(0.5) * (h_i + h_k)
-                                radius2 = radius2 * h_ab * h_ab * grid.inv_h2
-                            if listed:
-                                r = separation(grid, xi, pos_sorted[k])
-                                near = wp.dot(r, r) < radius2
-                                if two_centres and not near:
-                                    rg = r + off
-                                    near = wp.dot(rg, rg) < radius2
-                                if near:
-                                    if n < grid.max_neighbours:
-                                        nbr[i, n] = order[k]
-                                    n += 1
+                            if k != ki and listed(grid, t_i, ptype_sorted[k], h_i, hsml_sorted[k],
+                                                  separation(grid, xi, pos_sorted[k]), off):
+                                if n < grid.max_neighbours:
+                                    nbr[i, n] = order[k]
+                                n += 1
         if n > grid.max_neighbours:
             wp.atomic_max(overflow, 0, n)
             wp.atomic_min(fail, fail_slot, i)
@@ -325,8 +407,35 @@ def build(scalar):
             n = grid.max_neighbours
         count[i] = n
 
-    return SimpleNamespace(Grid=Grid, cell_keys=cell_keys, identity=identity, cell_ranges=cell_ranges,
-                           gather_sorted=gather_sorted,
+    @wp.kernel(enable_backward=False, module="unique")
+    def record_build(pos: wp.array(dtype=vec), ptype: wp.array(dtype=wp.int32), hsml: wp.array(dtype=scalar),
+                     needs_list: wp.array(dtype=wp.int32), x_build: wp.array(dtype=vec),
+                     ptype_built: wp.array(dtype=wp.int32), hsml_built: wp.array(dtype=scalar),
+                     needs_built: wp.array(dtype=wp.int32)):
+        """Without lists: each particle as the cells were sorted, what a walk tests its pairs on, as
+        a list's build tests them: where it stood, its kind, its h and whether it needs a list (a
+        list holds, until the next build, the pairs of its build: a particle made since has none)."""
+        i = wp.tid()
+        x_build[i] = pos[i]
+        ptype_built[i] = ptype[i]
+        hsml_built[i] = hsml[i]
+        needs_built[i] = needs_list[i]
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def walk_count(grid: Grid, nb: Walk, count: wp.array(dtype=wp.int32)):
+        """How many neighbours each particle's walk finds: its list's length."""
+        i = wp.tid()
+        n = int(0)
+        cell_i, reach_i = walk_from(grid, nb, i)
+        for w in range(walk_cells(reach_i)):
+            span = walk_span(grid, nb, i, cell_i, reach_i, w)
+            for slot in range(span[0], span[1]):
+                if walk_at(grid, nb, i, slot) >= 0:
+                    n += 1
+        count[i] = n
+
+    return SimpleNamespace(Grid=Grid, Walk=G.Walk, cell_keys=cell_keys, identity=identity, cell_ranges=cell_ranges,
+                           gather_sorted=gather_sorted, record_build=record_build, walk_count=walk_count,
                            neighbour_list=neighbour_list, check_displacement=check_displacement,
                            mark_built=mark_built)
 
@@ -349,7 +458,8 @@ class NeighbourList:
     def __init__(self, scalar, dim: int, support: float, lo, hi, periodic, ptype: wp.array,
                  needs_list: wp.array, ghost: wp.array, max_neighbours: int, launcher, hsml: wp.array,
                  variable: bool = False, substeps: int = 1, neighbour_major: "bool | None" = None,
-                 fail: "wp.array | None" = None, fail_slot: int = 0, hold: "wp.array | None" = None):
+                 fail: "wp.array | None" = None, fail_slot: int = 0, hold: "wp.array | None" = None,
+                 cells: bool = False):
         """``ptype``, ``needs_list`` and ``ghost`` (each particle's ghost-node offset, see
         neighbour_list) are the solver's own device arrays (it may reorder them); ``hsml``, each
         particle's smoothing length, which a pair's radius follows where ``variable`` (they differ:
@@ -357,7 +467,8 @@ class NeighbourList:
         step spans (2 with multirate), whose force passes all read these lists;
         ``neighbour_major``, the lists' layout (lists_array), by default the device's; ``fail``
         and ``fail_slot``, where a list that overflows its width is flagged (the solver's health
-        flags) and ``hold`` cleared (the step loop's flag that lets a step go on past its lists)."""
+        flags) and ``hold`` cleared (the step loop's flag that lets a step go on past its lists);
+        ``cells``: keep no lists, the passes walking the cells of the last sort (Walk)."""
         self._passes = build(scalar)
         Grid = self._passes.Grid
         n = needs_list.shape[0]
@@ -400,8 +511,10 @@ class NeighbourList:
         self._start = wp.zeros(ncells, dtype=wp.int32, device=device)
         self._end = wp.zeros(ncells, dtype=wp.int32, device=device)
         self.neighbour_major = device.is_cuda if neighbour_major is None else neighbour_major
-        self.nbr = lists_array(n, max_neighbours, device, self.neighbour_major)
-        self.count = wp.zeros(n, dtype=wp.int32, device=device)
+        self.cells = cells
+        # without lists: no list, no count and none of the sorted copies the lists' build reads
+        self.nbr = None if cells else lists_array(n, max_neighbours, device, self.neighbour_major)
+        self.count = None if cells else wp.zeros(n, dtype=wp.int32, device=device)
         self.overflow = wp.zeros(1, dtype=wp.int32, device=device)
         self._fail = fail if fail is not None else wp.zeros(1, dtype=wp.int32, device=device)
         self._fail_slot = fail_slot
@@ -409,13 +522,28 @@ class NeighbourList:
         self._needs_list = needs_list
         self._ghost = ghost
         self._ptype = ptype
-        self._pos_sorted = wp.zeros(n, dtype=wp.types.vector(3, scalar), device=device)
-        self._ptype_sorted = wp.zeros(n, dtype=wp.int32, device=device)
         self._hsml = hsml
-        self._hsml_sorted = wp.zeros(n, dtype=scalar, device=device)
+        # the lists' build reads sorted copies; walks read the kinds, h and needs as of the sort
+        sorted_n, built_n = (0, n) if cells else (n, 0)
+        self._pos_sorted = wp.zeros(sorted_n, dtype=wp.types.vector(3, scalar), device=device)
+        self._ptype_sorted = wp.zeros(sorted_n, dtype=wp.int32, device=device)
+        self._hsml_sorted = wp.zeros(sorted_n, dtype=scalar, device=device)
+        self._ptype_built = wp.zeros(built_n, dtype=wp.int32, device=device)
+        self._hsml_built = wp.zeros(built_n, dtype=scalar, device=device)
+        self._needs_built = wp.zeros(built_n, dtype=wp.int32, device=device)
         self._x_build = wp.zeros(n, dtype=wp.types.vector(3, scalar), device=device)
         self.stale = wp.ones(1, dtype=wp.int32, device=device)
         self.builds = wp.zeros(1, dtype=wp.int32, device=device)  # how many times the lists were built
+        self.walk = self._passes.Walk()
+        self._walk_arrays()
+
+    def _walk_arrays(self):
+        w = self.walk
+        w.cells = int(self.cells)
+        if not self.cells:
+            w.nbr, w.count = self.nbr, self.count
+        w.start, w.end, w.order, w.x_build, w.ghost = self._start, self._end, self._order, self._x_build, self._ghost
+        w.ptype, w.hsml, w.needs_list = self._ptype_built, self._hsml_built, self._needs_built
 
     @property
     def x_build(self) -> wp.array:
@@ -451,13 +579,24 @@ class NeighbourList:
 
     def _build(self, pos: wp.array, presorted: bool = False):
         """Sort (unless the particles already stand in the last sort's cell order), then build
-        every list."""
+        every list or, without lists, note where each particle stands (the walks test it there)."""
         n = self.n
         if presorted:
             wp.launch(self._passes.identity, dim=n, inputs=[self._order], device=self.device)
         else:
             self.sort(pos)
         self._ranges()
+        if self.cells:
+            wp.launch(self._passes.record_build, dim=n,
+                      inputs=[pos, self._ptype, self._hsml, self._needs_list, self._x_build, self._ptype_built,
+                              self._hsml_built, self._needs_built], device=self.device)
+        else:
+            self._list(pos)
+        wp.launch(self._passes.mark_built, dim=1, inputs=[self.stale, self.builds], device=self.device)
+
+    def _list(self, pos: wp.array):
+        """Every particle's list, from the sort just made."""
+        n = self.n
         wp.launch(self._passes.gather_sorted, dim=n, inputs=[self._order, pos, self._ptype, self._hsml,
                                                              self._pos_sorted, self._ptype_sorted, self._hsml_sorted],
                   device=self.device)
@@ -466,7 +605,6 @@ class NeighbourList:
                                                        self._start, self._end, self.nbr, self.count, self._needs_list,
                                                        self._ghost, self._x_build, self.overflow, self._fail,
                                                        self._fail_slot, self._hold])
-        wp.launch(self._passes.mark_built, dim=1, inputs=[self.stale, self.builds], device=self.device)
 
     def rebuild(self, pos: wp.array, force: bool = False):
         """Sort and build the lists if they are stale (the device's flag: a branch of a captured
@@ -481,11 +619,21 @@ class NeighbourList:
         """Lists ``width`` long, to be built before they are read (stale)."""
         self.max_neighbours = self.grid.max_neighbours = int(width)
         self.nbr = lists_array(self.n, self.max_neighbours, self.device, self.neighbour_major)
+        self._walk_arrays()
         self.stale.fill_(1)
+
+    def counts(self) -> np.ndarray:
+        """Each particle's neighbour count as of the last build (a host read; without lists, what
+        a walk finds)."""
+        if not self.cells:
+            return self.count.numpy()
+        count = wp.zeros(self.n, dtype=wp.int32, device=self.device)
+        wp.launch(self._passes.walk_count, dim=self.n, inputs=[self.grid, self.walk, count], device=self.device)
+        return count.numpy()
 
     def longest(self) -> int:
         """The longest list of the last build, or of the build that overflowed (a host read)."""
-        return max(int(self.count.numpy().max(initial=0)), int(self.overflow.numpy()[0]))
+        return max(int(self.counts().max(initial=0)), int(self.overflow.numpy()[0]))
 
     def rebuild_sorted(self, pos: wp.array):
         """Build the lists of particles just put in the order of the last sort (a reorder), with
@@ -507,4 +655,4 @@ class NeighbourList:
 
     def mean_neighbours(self) -> float:
         """Mean list length over the fluid particles."""
-        return float(self.count.numpy()[self._ptype.numpy() == 0].mean())
+        return float(self.counts()[self._ptype.numpy() == 0].mean())

@@ -70,6 +70,7 @@ def _force_passes(scalar):
     plane_wall, plane_corners = B.plane_wall, B.plane_corners
     N = neighbours.grid(scalar)
     Grid, separation = N.Grid, N.separation
+    Walk, walk_from, walk_cells, walk_span, walk_at = N.Walk, N.walk_from, N.walk_cells, N.walk_span, N.walk_at
 
     @wp.func
     def pair(p: Params, f: Fields, a: int, b: int, r_ab: vec):
@@ -133,7 +134,7 @@ def _force_passes(scalar):
         f.p_rho2[i] = pr / (r * r)
 
     @wp.kernel(enable_backward=False, module="unique")
-    def sps_strain(p: Params, grid: Grid, nbr: wp.array2d(dtype=wp.int32), count: wp.array(dtype=wp.int32),
+    def sps_strain(p: Params, grid: Grid, nb: Walk,
                    f: Fields, levels: int, chunk: int, threads: int):
         i = wp.tid() * threads + chunk
         zero = vec(scalar(0.0))
@@ -144,15 +145,19 @@ def _force_passes(scalar):
             f.tau_off[i] = zero
             return
         grad_u = mat33(scalar(0.0))
-        for k in range(count[i]):
-            j = nbr[i, k]
-            if (carries_fluid(f.ptype[j]) or p.wall_volume != 0) and same_level(p, f.hsml[i], f.hsml[j]):
-                r_ab = separation(grid, f.pos[i], f.pos[j])
-                r = wp.length(r_ab)
-                h, inv_h, norm, scale = smoothing(p, f.hsml[i], f.hsml[j])
-                if r < scalar(2.0) * h:
-                    grad = r_ab * grad_factor(p.kernel, norm, inv_h, r)
-                    grad_u += f.mass[j] / f.rho[j] * wp.outer(f.vel[j] - f.vel[i], grad)
+        cell_i, reach_i = walk_from(grid, nb, i)
+        for w in range(walk_cells(reach_i)):
+            span = walk_span(grid, nb, i, cell_i, reach_i, w)
+            for slot in range(span[0], span[1]):
+                j = walk_at(grid, nb, i, slot)
+                if j >= 0:
+                    if (carries_fluid(f.ptype[j]) or p.wall_volume != 0) and same_level(p, f.hsml[i], f.hsml[j]):
+                        r_ab = separation(grid, f.pos[i], f.pos[j])
+                        r = wp.length(r_ab)
+                        h, inv_h, norm, scale = smoothing(p, f.hsml[i], f.hsml[j])
+                        if r < scalar(2.0) * h:
+                            grad = r_ab * grad_factor(p.kernel, norm, inv_h, r)
+                            grad_u += f.mass[j] / f.rho[j] * wp.outer(f.vel[j] - f.vel[i], grad)
         s2 = own_scale(p, f.hsml[i])
         s2 = s2 * s2  # the Smagorinsky length is the particle's own spacing
         d, o = sps_stress(grad_u, p.cs_dl2 * s2, p.ci_dl2 * s2)
@@ -160,7 +165,7 @@ def _force_passes(scalar):
         f.tau_off[i] = o
 
     @wp.kernel(enable_backward=False, module="unique")
-    def interact(p: Params, grid: Grid, nbr: wp.array2d(dtype=wp.int32), count: wp.array(dtype=wp.int32), f: Fields,
+    def interact(p: Params, grid: Grid, nb: Walk, f: Fields,
                  plane_point: wp.array(dtype=vec), plane_normal: wp.array(dtype=vec),
                  acc: wp.array(dtype=vec), drho: wp.array(dtype=scalar), xsph: wp.array(dtype=vec),
                  shift: wp.array(dtype=vec), maxima: wp.array(dtype=scalar), clumped: wp.array(dtype=wp.int32),
@@ -183,21 +188,25 @@ def _force_passes(scalar):
             a = p.gravity
             mu_max = scalar(0.0)
             clump_r = p.clump_r * scale_i
-            for k in range(count[i]):
-                j = nbr[i, k]
-                r_ij = separation(grid, xi, f.pos[j])
-                if carries_fluid(f.ptype[j]) and same_level(p, f.hsml[i], f.hsml[j]) \
-                        and wp.dot(r_ij, r_ij) < clump_r * clump_r:
-                    close = 1
-                da, ddr, dxs, mu, grad = pair(p, f, i, j, r_ij)
-                a += da
-                dr += ddr
-                xs += dxs
-                mu_max = wp.max(mu_max, mu)
-                if p.shift_a_h != scalar(0.0):  # grad is zero for walls without fluid volume
-                    dc, ddiv = concentration_terms(f.mass[j] / f.rho[j], r_ij, grad)
-                    grad_c += dc
-                    div_r += ddiv
+            cell_i, reach_i = walk_from(grid, nb, i)
+            for w in range(walk_cells(reach_i)):
+                span = walk_span(grid, nb, i, cell_i, reach_i, w)
+                for slot in range(span[0], span[1]):
+                    j = walk_at(grid, nb, i, slot)
+                    if j >= 0:
+                        r_ij = separation(grid, xi, f.pos[j])
+                        if carries_fluid(f.ptype[j]) and same_level(p, f.hsml[i], f.hsml[j]) \
+                                and wp.dot(r_ij, r_ij) < clump_r * clump_r:
+                            close = 1
+                        da, ddr, dxs, mu, grad = pair(p, f, i, j, r_ij)
+                        a += da
+                        dr += ddr
+                        xs += dxs
+                        mu_max = wp.max(mu_max, mu)
+                        if p.shift_a_h != scalar(0.0):  # grad is zero for walls without fluid volume
+                            dc, ddiv = concentration_terms(f.mass[j] / f.rho[j], r_ij, grad)
+                            grad_c += dc
+                            div_r += ddiv
             if p.n_planes > 0:
                 h_i, inv_h_i, norm_i, unused = smoothing(p, f.hsml[i], f.hsml[i])
                 ui = f.vel[i]
@@ -230,17 +239,21 @@ def _force_passes(scalar):
             # a passive particle follows another level, and nothing pushes it off a wall, so the
             # wall would integrate its drift
             ui = f.vel[i]
-            for k in range(count[i]):
-                j = nbr[i, k]
-                if f.ptype[j] == FLUID and same_level(p, f.hsml[j], f.hsml[i]):
-                    r_ji = separation(grid, f.pos[j], xi)
-                    r = wp.length(r_ji)
-                    h, inv_h, norm, scale = smoothing(p, f.hsml[j], f.hsml[i])
-                    if p.wall_continuity != 0 and r < scalar(2.0) * h:
-                        dr += wall_density_rate(p.kernel, norm, inv_h, f.mass[j], ui, f.vel[j], r_ji, r)
-                    if f.body[i] >= 0:
-                        da, ddr, dxs, mu, grad = pair(p, f, j, i, r_ji)
-                        a -= f.mass[j] / f.mass[i] * da
+            cell_i, reach_i = walk_from(grid, nb, i)
+            for w in range(walk_cells(reach_i)):
+                span = walk_span(grid, nb, i, cell_i, reach_i, w)
+                for slot in range(span[0], span[1]):
+                    j = walk_at(grid, nb, i, slot)
+                    if j >= 0:
+                        if f.ptype[j] == FLUID and same_level(p, f.hsml[j], f.hsml[i]):
+                            r_ji = separation(grid, f.pos[j], xi)
+                            r = wp.length(r_ji)
+                            h, inv_h, norm, scale = smoothing(p, f.hsml[j], f.hsml[i])
+                            if p.wall_continuity != 0 and r < scalar(2.0) * h:
+                                dr += wall_density_rate(p.kernel, norm, inv_h, f.mass[j], ui, f.vel[j], r_ji, r)
+                            if f.body[i] >= 0:
+                                da, ddr, dxs, mu, grad = pair(p, f, j, i, r_ji)
+                                a -= f.mass[j] / f.mass[i] * da
         acc[i] = a
         drho[i] = dr
         xsph[i] = xs
@@ -252,7 +265,7 @@ def _force_passes(scalar):
         clumped[i] = close
 
     @wp.kernel(enable_backward=False, module="unique")
-    def wall_energy(p: Params, grid: Grid, nbr: wp.array2d(dtype=wp.int32), count: wp.array(dtype=wp.int32),
+    def wall_energy(p: Params, grid: Grid, nb: Walk,
                     pos: wp.array(dtype=vec), mass: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
                     part: wp.array2d(dtype=wp.float64), lead: int, step: int, chunk: int, stride: int):
         """Block k's share (part[k, 0], sums.py) of the energy the repulsive walls (Lennard-Jones,
@@ -267,23 +280,28 @@ def _force_passes(scalar):
             if i < n:
                 if ptype[i] == FLUID:
                     e = scalar(0.0)
-                    for m in range(count[i]):
-                        j = nbr[i, m]
-                        if ptype[j] == BOUNDARY:
-                            e += repulsion_potential(p, mass[i], mass[j], wp.length(separation(grid, pos[i], pos[j])))
+                    cell_i, reach_i = walk_from(grid, nb, i)
+                    for w in range(walk_cells(reach_i)):
+                        span = walk_span(grid, nb, i, cell_i, reach_i, w)
+                        for slot in range(span[0], span[1]):
+                            j = walk_at(grid, nb, i, slot)
+                            if j >= 0:
+                                if ptype[j] == BOUNDARY:
+                                    r = wp.length(separation(grid, pos[i], pos[j]))
+                                    e += repulsion_potential(p, mass[i], mass[j], r)
                     if e > scalar(0.0):
                         held = held + wp.float64(mass[i] * e)
         part[k, 0] = held
 
     @wp.kernel(enable_backward=False, module="unique")
-    def shepard(p: Params, grid: Grid, nbr: wp.array2d(dtype=wp.int32), count: wp.array(dtype=wp.int32), f: Fields,
+    def shepard(p: Params, grid: Grid, nb: Walk, f: Fields,
                 rho_out: wp.array(dtype=scalar), chunk: int, stride: int):
         """The Shepard filter (density.shepard, thesis Eq. 2.28) on the fluid; boundaries keep theirs."""
         i = wp.tid() * stride + chunk
         if f.ptype[i] != FLUID:
             rho_out[i] = f.rho[i]
             return
-        rho_out[i] = shepard_density(p, grid, nbr, count, i, f)
+        rho_out[i] = shepard_density(p, grid, nb, i, f)
 
     return SimpleNamespace(equation_of_state=equation_of_state, sps_strain=sps_strain, interact=interact,
                            wall_energy=wall_energy,

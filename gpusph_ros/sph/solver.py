@@ -107,12 +107,13 @@ class Solver:
                                         cfg.periodic, self.ptype, self._needs_list, self.ghost,
                                         max_neighbours or 1, self.launch, self.hsml, self.params.variable_h != 0,
                                         self.params.coarse_stride, fail=self._fail,
-                                        fail_slot=health.NEIGHBOUR_OVERFLOW, hold=self.flag(LISTS_HOLD))
+                                        fail_slot=health.NEIGHBOUR_OVERFLOW, hold=self.flag(LISTS_HOLD),
+                                        cells=cfg.cell_walks)
         # the lists' width: the caller's, fixed, or measured on the particles as built (a first build
         # into lists one long counts the longest: neighbours.longest) and widened whenever a list
         # outgrows it, up to the lattice's estimate (what the plan prices; a list longer than that
         # is clumped particles, not a flow)
-        self._measured_width = max_neighbours is None
+        self._measured_width = max_neighbours is None and not cfg.cell_walks
         self._widest = default_max_neighbours(cfg.dim, cfg.hdx, self.finest, self.params.coarse_stride)
         if self._measured_width:
             self.neighbours.rebuild(self.pos, force=True)
@@ -286,12 +287,12 @@ class Solver:
         if self.config.zones:
             # finest first: a coarser level's passive particles read the next finer level's
             for h in self._level_h[:1] if which == FINEST_LEVEL else self._level_h:
-                self.launch(levels.build(self.scalar).passive_state, n, [p, nl.grid, nl.nbr, nl.count, f, self._zone_lo,
+                self.launch(levels.build(self.scalar).passive_state, n, [p, nl.grid, nl.walk, f, self._zone_lo,
                                                                          self._zone_hi, self._zone_h, h])
         wp.launch(k.equation_of_state, dim=n, inputs=[p, f], device=self.device)
         if self.config.viscosity == "sps":
-            self.launch(k.sps_strain, n, [p, nl.grid, nl.nbr, nl.count, f, which])
-        self.launch(k.interact, n, [p, nl.grid, nl.nbr, nl.count, f, self._plane_pt, self._plane_n, self.acc,
+            self.launch(k.sps_strain, n, [p, nl.grid, nl.walk, f, which])
+        self.launch(k.interact, n, [p, nl.grid, nl.walk, f, self._plane_pt, self._plane_n, self.acc,
                                     self._drho, self._xsph, self._shift, self._maxima, self._clumped, which])
         if which == EVERY_LEVEL:  # a floating body steps with the passes over every level (_two_rates)
             self._body_wrench(f)
@@ -464,7 +465,7 @@ class Solver:
         part.total(self._energy_sum, health.ENERGY)
         if self.boundary.repulsive and self.n > self.n_fluid:
             nl = self.neighbours
-            self.launch(k.wall_energy, part.count, [p, nl.grid, nl.nbr, nl.count, self._pos_c, self.mass, self.ptype,
+            self.launch(k.wall_energy, part.count, [p, nl.grid, nl.walk, self._pos_c, self.mass, self.ptype,
                                                     *part.args()])
             part.total(self._energy_sum, health.ENERGY, add=True)
         wp.launch(k.census_check, dim=1, inputs=[p, self._energy_sum, self._clump_count, self._fail],
@@ -570,7 +571,7 @@ class Solver:
         nl = self.neighbours
         if rebuild:
             nl.rebuild(self.pos, force=True)
-        self.launch(self._passes.shepard, self.n, [self.params, nl.grid, nl.nbr, nl.count, self.fields, self._rho_c])
+        self.launch(self._passes.shepard, self.n, [self.params, nl.grid, nl.walk, self.fields, self._rho_c])
         wp.copy(self.rho, self._rho_c)
         self._view_fresh = False
 
@@ -827,7 +828,12 @@ class Solver:
         many measurements ask (each made its own equation-of-state pass and radix sort)."""
         if not self._view_fresh:
             self.update_pressure()
-            self.neighbours.sort_cells(self.pos)
+            if self.neighbours.cells:
+                # the walks' own sort, made now if the next step would make it (the same positions):
+                # a sort of the view's own would change the cells the next step walks
+                self.neighbours.rebuild(self.pos)
+            else:
+                self.neighbours.sort_cells(self.pos)
             self._view_fresh = True
         return self.params, self.fields, self.neighbours
 

@@ -60,7 +60,7 @@ class Adami(BoundaryModel):
     def before_forces(self, solver, fields):
         nl = solver.neighbours
         solver.launch(build(solver.scalar).boundary_pressure, solver.n,
-                      [solver.params, nl.grid, nl.nbr, nl.count, fields])
+                      [solver.params, nl.grid, nl.walk, fields])
 
     def face_pressure(self, scalar):
         return build(scalar).face_pressure
@@ -77,6 +77,7 @@ def build(scalar):
     N = neighbours.grid(scalar)
     Grid, separation = N.Grid, N.separation
     cell_coord, cells_around, cell_around = N.cell_coord, N.cells_around, N.cell_around
+    Walk, walk_from, walk_cells, walk_span, walk_at = N.Walk, N.walk_from, N.walk_cells, N.walk_span, N.walk_at
     S = state.build(scalar)
     Params, Fields = S.Params, S.Fields
     E = eos.build(scalar)
@@ -110,7 +111,7 @@ def build(scalar):
         return p_sum, rho_r, w_sum
 
     @wp.kernel(enable_backward=False, module="unique")
-    def boundary_pressure(p: Params, grid: Grid, nbr: wp.array2d(dtype=wp.int32), count: wp.array(dtype=wp.int32),
+    def boundary_pressure(p: Params, grid: Grid, nb: Walk,
                           f: Fields, chunk: int, stride: int):
         """Each boundary particle's density from the pressure extrapolated from its level's fluid."""
         i = wp.tid() * stride + chunk
@@ -119,8 +120,13 @@ def build(scalar):
         p_sum = scalar(0.0)
         w_sum = scalar(0.0)
         rho_r = vec(scalar(0.0))
-        for k in range(count[i]):
-            p_sum, rho_r, w_sum = fluid_term(p, grid, f, f.pos[i], f.hsml[i], nbr[i, k], p_sum, rho_r, w_sum)
+        cell_i, reach_i = walk_from(grid, nb, i)
+        for w in range(walk_cells(reach_i)):
+            span = walk_span(grid, nb, i, cell_i, reach_i, w)
+            for slot in range(span[0], span[1]):
+                j = walk_at(grid, nb, i, slot)
+                if j >= 0:
+                    p_sum, rho_r, w_sum = fluid_term(p, grid, f, f.pos[i], f.hsml[i], j, p_sum, rho_r, w_sum)
         # a wall pushes and never pulls (the module's docstring); a_w: a moving body's (bodies.py)
         pressure = wp.max(extrapolated_pressure(p_sum, rho_r, w_sum, p.gravity, f.wall_acc[i]), scalar(0.0))
         f.rho[i] = eos_density(pressure, p.rho0, p.eos_b, p.gamma, p.rho_min, p.rho_max)

@@ -70,7 +70,7 @@ class Mdbc(BoundaryModel):
         the finest level's steps: each level's walls read their own level's fluid in ``fields``."""
         nl = solver.neighbours
         solver.launch(build(solver.scalar).boundary_state, solver.n,
-                      [solver.params, nl.grid, nl.nbr, nl.count, fields, solver.ghost])
+                      [solver.params, nl.grid, nl.walk, fields, solver.ghost])
 
     def face_pressure(self, scalar):
         return build(scalar).face_pressure
@@ -89,6 +89,7 @@ def build(scalar):
     same_level = kernels.build(scalar).same_level
     N = neighbours.grid(scalar)
     Grid, cell_coord, cells_around, cell_around = N.Grid, N.cell_coord, N.cells_around, N.cell_around
+    Walk, walk_from, walk_cells, walk_span, walk_at = N.Walk, N.walk_from, N.walk_cells, N.walk_span, N.walk_at
     S = state.build(scalar)
     Params, Fields = S.Params, S.Fields
     E = eos.build(scalar)
@@ -147,7 +148,7 @@ def build(scalar):
             ghost[i] = ghost_offset(p, pos[i], body[i], solid_lo, solid_hi)
 
     @wp.kernel(enable_backward=False, module="unique")
-    def boundary_state(p: Params, grid: Grid, nbr: wp.array2d(dtype=wp.int32), count: wp.array(dtype=wp.int32),
+    def boundary_state(p: Params, grid: Grid, nb: Walk,
                        f: Fields, ghost: wp.array(dtype=vec), chunk: int, stride: int):
         """Each boundary particle's density (and velocity, with a slip mode) from its ghost node,
         over its neighbour list (which holds the fluid near the ghost node: neighbours.py)."""
@@ -158,11 +159,15 @@ def build(scalar):
         xg = f.pos[i] + off
         a, rhs, u = no_sums()
         h_g = f.hsml[i]
-        for k in range(count[i]):
-            j = nbr[i, k]
-            # a slot vacated this step may still be listed (levels.py)
-            if state.carries_fluid(f.ptype[j]) and same_level(p, h_g, f.hsml[j]):
-                a, rhs, u = ghost_term(p, grid, f, xg, h_g, j, a, rhs, u)
+        cell_i, reach_i = walk_from(grid, nb, i)
+        for w in range(walk_cells(reach_i)):
+            span = walk_span(grid, nb, i, cell_i, reach_i, w)
+            for slot in range(span[0], span[1]):
+                j = walk_at(grid, nb, i, slot)
+                if j >= 0:
+                    # a slot vacated this step may still be listed (levels.py)
+                    if state.carries_fluid(f.ptype[j]) and same_level(p, h_g, f.hsml[j]):
+                        a, rhs, u = ghost_term(p, grid, f, xg, h_g, j, a, rhs, u)
         f.rho[i] = eos_density(cloned_pressure(p, ghost_density(p, a, rhs, h_g), -off), p.rho0, p.eos_b, p.gamma,
                                p.rho_min, p.rho_max)
         u_b = vec(scalar(0.0))
