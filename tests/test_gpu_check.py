@@ -1,6 +1,6 @@
 """`make gpu-check` on a machine without CUDA says so and exits 0, having checked nothing; its CPU
-rehearsal (`--cpu`) writes every section of the report, the step counts, graph-against-eager and
-same-run-twice tables among them, with every step passing."""
+rehearsal (`--cpu`) writes every section of the report, the step counts, graph-against-eager,
+same-run-twice and lists-against-cells tables among them, with every step passing."""
 import re
 import subprocess
 import sys
@@ -29,7 +29,8 @@ def test_the_cpu_rehearsal_writes_every_section_of_the_report(tmp_path):
     report = (tmp_path / "report.md").read_text()
     assert out.returncode == 0, out.stdout + out.stderr + report
     sections = re.findall(r"^## (.*): (ok|FAILED) \(\d+ s\)$", report, flags=re.M)
-    assert len(sections) == 7 and all(state == "ok" for _, state in sections), sections
+    assert len(sections) == 8 and all(state == "ok" for _, state in sections), sections
+    assert re.search(r"^cpu +lists .*\n^cpu +cells ", report, flags=re.M)  # the two searches side by side
     assert "every case repeats bit for bit" in report  # bench/repeat.py: the same run twice
     assert "no GPU figure below" in report and "every step passed" in report
     assert re.search(r"^\| ordinary \| \d+ \| \d+ \| 0 \|", report, flags=re.M)  # no sort on an ordinary step
