@@ -317,7 +317,7 @@ def test_a_checkpoint_of_a_run_that_walks_the_cells_steps_on_bit_for_bit_and_hol
     first = model.solver()
     first.advance(0.03)
     state = checkpoint.capture(first)
-    assert checkpoint.LISTS not in state["arrays"] and "neighbours.count" not in state["arrays"]
+    assert "neighbours.nbr" not in state["arrays"] and "neighbours.count" not in state["arrays"]
     second = model.solver()
     checkpoint.restore(second, state)
     for solver in (first, second):

@@ -71,28 +71,10 @@ def device_arrays(solver) -> dict:
     return out
 
 
-# not stored: the sorted copies every step's cell sort makes again before a pass reads them, and the
-# lists, whose used entries are stored packed (LISTS) instead of the whole fixed-width array
-NOT_STORED = ("neighbours.nbr", "neighbours._pos_sorted", "neighbours._ptype_sorted", "neighbours._hsml_sorted")
-LISTS = "neighbours.nbr_used"
-
-
-# the lists are packed this many rows at a time: a mask of the whole n x width lists would be 1.7 GB
-# of host memory at 10^7 particles, more than the packed lists themselves
-PACKED_ROWS = 1 << 16
-
-
-def _used(width: int, count) -> np.ndarray:
-    """Which entries of lists ``width`` wide (n x width) hold a neighbour."""
-    return np.arange(width)[None, :] < np.asarray(count)[:, None]
-
-
-def _packed(nbr: wp.array, count: np.ndarray) -> np.ndarray:
-    """The entries of the lists ``nbr`` that hold a neighbour, row after row, read PACKED_ROWS rows
-    at a time (from a GPU, each block copied on its own)."""
-    n, width = nbr.shape
-    blocks = [(i, min(i + PACKED_ROWS, n)) for i in range(0, n, PACKED_ROWS)]
-    return np.concatenate([nbr[a:b].numpy()[_used(width, count[a:b])] for a, b in blocks])
+# not stored: the lists, which put() builds again from the last build's sort, positions, sorted
+# kinds and h and the lists' lengths (NeighbourList.relist), and the sorted positions that build
+# gathers again
+NOT_STORED = ("neighbours.nbr", "neighbours._pos_sorted")
 
 
 def _width(state) -> "int | None":
@@ -122,11 +104,7 @@ def _stored(solver) -> dict:
 def capture(solver) -> dict:
     """The solver's state: {"arrays": {path: numpy copy}, "host": {holder: {name: value}}}."""
     wp.synchronize_device(solver.device)
-    arrays = {path: a.numpy().copy() for path, a in _stored(solver).items()}
-    nl = solver.neighbours
-    if not nl.cells:
-        arrays[LISTS] = _packed(nl.nbr, arrays["neighbours.count"])
-    return {"arrays": arrays, "host": _host(solver)}
+    return {"arrays": {path: a.numpy().copy() for path, a in _stored(solver).items()}, "host": _host(solver)}
 
 
 def layout(target: wp.array) -> tuple:
@@ -162,8 +140,11 @@ def _indices(solver, arrays: dict) -> str:
     order = arrays["neighbours._order"]  # the cell sort's buffers, twice n long
     if order.min(initial=0) < 0 or order.max(initial=0) >= n:
         return f"neighbours._order holds indices outside [0, {n - 1}]"
-    if not np.isin(arrays["solver.ptype"], KINDS).all():
-        return f"solver.ptype holds kinds other than {', '.join(map(str, KINDS))}"
+    if not solver.neighbours.cells and not _permutation(order[:n], n):  # put() lists the particles in it
+        return f"neighbours._order does not begin with an order of this solver's {n} particles"
+    for path in ("solver.ptype", "neighbours._ptype_sorted", "neighbours._ptype_built"):
+        if path in arrays and not np.isin(arrays[path], KINDS).all():
+            return f"{path} holds kinds other than {', '.join(map(str, KINDS))}"
     body = arrays["solver.body"]
     if body.min(initial=-1) < -1 or body.max(initial=-1) >= bodies:
         return f"solver.body lies outside [-1, {bodies - 1}]"
@@ -177,9 +158,12 @@ def _values(solver, arrays: dict, host: dict) -> str:
     """What in ``arrays`` no run of this solver holds, or "": a particle's h other than a level's
     (all zero, the clock stood still), a particle's mass or density not above 0, a clock other than the
     state's time or not a time (only its target may be infinite)."""
-    hsml = arrays["solver.hsml"]
-    if not np.isin(hsml, np.asarray(solver._level_h, dtype=hsml.dtype)).all():
-        return "solver.hsml holds an h that is none of this solver's levels'"
+    # a search's reach follows h; the build's copies are zero until a first build
+    for path, levels in (("solver.hsml", solver._level_h), ("neighbours._hsml_sorted", [0.0, *solver._level_h]),
+                         ("neighbours._hsml_built", [0.0, *solver._level_h])):
+        hsml = arrays.get(path, arrays["solver.hsml"])
+        if not np.isin(hsml, np.asarray(levels, dtype=hsml.dtype)).all():
+            return f"{path} holds an h that is none of this solver's levels'"
     held = arrays["solver.ptype"] != VACANT  # a refinement level's reserved slots hold nothing yet
     for path in ("solver.mass", "solver.rho"):
         if not (arrays[path][held] > 0).all():
@@ -222,9 +206,8 @@ def mismatch(solver, state) -> str:
     if not (isinstance(state, dict) and isinstance(state.get("arrays"), dict) and isinstance(state.get("host"), dict)):
         return "it holds no arrays and host values"
     arrays = _stored(solver)
-    names = set(arrays) | (set() if solver.neighbours.cells else {LISTS})
-    if names != set(state["arrays"]):
-        return "its arrays are not this solver's: " + ", ".join(sorted(names ^ set(state["arrays"])))
+    if set(arrays) != set(state["arrays"]):
+        return "its arrays are not this solver's: " + ", ".join(sorted(set(arrays) ^ set(state["arrays"])))
     for path, target in arrays.items():
         data = state["arrays"][path]
         shape, dtype = layout(target)
@@ -265,10 +248,6 @@ def _lists(solver, state) -> str:
         return f"its neighbour lists are {width} wide, more than this solver's {widest}"
     if count.min(initial=0) < 0 or count.max(initial=0) > width:
         return f"neighbours.count lies outside [0, {width}]"
-    lists, used = state["arrays"][LISTS], int(count.sum())
-    if not (isinstance(lists, np.ndarray) and lists.dtype == np.int32 and lists.shape == (used,)
-            and 0 <= lists.min(initial=0) <= lists.max(initial=0) < nl.n):
-        return f"{LISTS} is not {used} indices of this solver's {nl.n} particles"
     return ""
 
 
@@ -303,9 +282,7 @@ def put(solver, state: dict):
     for path, target in _stored(solver).items():
         wp.copy(target, staged[path])
     if not nl.cells:
-        lists = np.array(nl.nbr.numpy())
-        lists[_used(width, state["arrays"]["neighbours.count"])] = state["arrays"][LISTS]
-        nl.nbr.assign(lists)
+        nl.relist()
     for holder, obj in (("solver", solver), ("neighbours", nl)):
         for name, value in state["host"][holder].items():
             setattr(obj, name, value)

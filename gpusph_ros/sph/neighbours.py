@@ -344,6 +344,18 @@ def build(scalar):
         hsml_sorted[k] = hsml[i]
 
     @wp.kernel(enable_backward=False, module="unique")
+    def gather_positions(order: wp.array(dtype=wp.int32), x: wp.array(dtype=vec), x_sorted: wp.array(dtype=vec)):
+        k = wp.tid()
+        x_sorted[k] = x[order[k]]
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def listed_then(count: wp.array(dtype=wp.int32), needs_list: wp.array(dtype=wp.int32)):
+        """Which particles a build gave a list that found a neighbour: built again with these alone
+        needing one, the lists are that build's (a particle with none found is empty either way)."""
+        i = wp.tid()
+        needs_list[i] = wp.where(count[i] > 0, 1, 0)
+
+    @wp.kernel(enable_backward=False, module="unique")
     def check_displacement(grid: Grid, pos: wp.array(dtype=vec), vel: wp.array(dtype=vec),
                            x_build: wp.array(dtype=vec), clock: wp.array(dtype=wp.float64),
                            stale: wp.array(dtype=wp.int32)):
@@ -435,7 +447,8 @@ def build(scalar):
         count[i] = n
 
     return SimpleNamespace(Grid=Grid, Walk=G.Walk, cell_keys=cell_keys, identity=identity, cell_ranges=cell_ranges,
-                           gather_sorted=gather_sorted, record_build=record_build, walk_count=walk_count,
+                           gather_sorted=gather_sorted, gather_positions=gather_positions, listed_then=listed_then,
+                           record_build=record_build, walk_count=walk_count,
                            neighbour_list=neighbour_list, check_displacement=check_displacement,
                            mark_built=mark_built)
 
@@ -565,12 +578,6 @@ class NeighbourList:
         wp.utils.radix_sort_pairs(self._keys, self._order, self.n, end_bit=self._key_bits)
         return self._order
 
-    def sort_cells(self, pos: wp.array):
-        """Sort the particles by cell and find each cell's range (cell_start, cell_end, order), the
-        lists untouched: for a measurement that walks the cells of the current state."""
-        self.sort(pos)
-        self._ranges()
-
     def _ranges(self):
         self._start.zero_()
         self._end.zero_()
@@ -596,15 +603,28 @@ class NeighbourList:
 
     def _list(self, pos: wp.array):
         """Every particle's list, from the sort just made."""
-        n = self.n
-        wp.launch(self._passes.gather_sorted, dim=n, inputs=[self._order, pos, self._ptype, self._hsml,
-                                                             self._pos_sorted, self._ptype_sorted, self._hsml_sorted],
+        wp.launch(self._passes.gather_sorted, dim=self.n,
+                  inputs=[self._order, pos, self._ptype, self._hsml, self._pos_sorted, self._ptype_sorted,
+                          self._hsml_sorted], device=self.device)
+        self._fill(self._needs_list)
+
+    def _fill(self, needs_list: wp.array):
+        self.launcher(self._passes.neighbour_list, self.n, [self.grid, self._pos_sorted, self._ptype_sorted,
+                                                            self._hsml_sorted, self._order, self._start, self._end,
+                                                            self.nbr, self.count, needs_list, self._ghost,
+                                                            self._x_build, self.overflow, self._fail,
+                                                            self._fail_slot, self._hold])
+
+    def relist(self):
+        """The lists of the last build again, from what a state keeps of it (checkpoint.put): that
+        build's sort (order, cell ranges), the positions then (x_build), the kinds and h it read
+        (the sorted copies) and the lists' lengths, nonzero exactly where a particle needed a list
+        and found a neighbour: each list the same, entry for entry."""
+        wp.launch(self._passes.gather_positions, dim=self.n, inputs=[self._order, self._x_build, self._pos_sorted],
                   device=self.device)
-        self.launcher(self._passes.neighbour_list, n, [self.grid, self._pos_sorted, self._ptype_sorted,
-                                                       self._hsml_sorted, self._order,
-                                                       self._start, self._end, self.nbr, self.count, self._needs_list,
-                                                       self._ghost, self._x_build, self.overflow, self._fail,
-                                                       self._fail_slot, self._hold])
+        needs = wp.empty(self.n, dtype=wp.int32, device=self.device)  # a restore's, not the step's
+        wp.launch(self._passes.listed_then, dim=self.n, inputs=[self.count, needs], device=self.device)
+        self._fill(needs)
 
     def rebuild(self, pos: wp.array, force: bool = False):
         """Sort and build the lists if they are stale (the device's flag: a branch of a captured

@@ -823,17 +823,17 @@ class Solver:
         return snap
 
     def measurement_view(self):
-        """(params, fields, neighbours) with pressure and the cell sort brought up to the current
-        state, for measurements that run on the device between steps: once an output, however
-        many measurements ask (each made its own equation-of-state pass and radix sort)."""
+        """(params, fields, neighbours) with pressure brought up to the current state and the cells
+        valid for it, for measurements that run on the device between steps: once an output, however
+        many measurements ask (each made its own equation-of-state pass and radix sort). The cells
+        are the last build's: a walk one list radius around a point finds every particle within a
+        kernel support of it until the lists go stale, and then the build the next step would make
+        (at the same positions) is made now. A sort of the view's own would leave the cells other
+        than the lists' build: a walk without lists would read them, and a state would not hold
+        the build's (checkpoint.put builds the lists again from it)."""
         if not self._view_fresh:
             self.update_pressure()
-            if self.neighbours.cells:
-                # the walks' own sort, made now if the next step would make it (the same positions):
-                # a sort of the view's own would change the cells the next step walks
-                self.neighbours.rebuild(self.pos)
-            else:
-                self.neighbours.sort_cells(self.pos)
+            self.neighbours.rebuild(self.pos)
             self._view_fresh = True
         return self.params, self.fields, self.neighbours
 
