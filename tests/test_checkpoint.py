@@ -98,7 +98,11 @@ def test_an_edited_state_is_refused_whole_and_changes_nothing():
             (edited({"solver.body": good["arrays"]["solver.body"] + 7}), "solver.body lies outside"),
             (edited({"solver.vel": good["arrays"]["solver.vel"] * np.nan}), "solver.vel holds a value that is not"),
             (edited(solver__time=float("nan")), "solver value time is not a value"),
-            (edited(neighbours__max_neighbours=100_000), "lists are 100000 wide")]:
+            (edited(neighbours__max_neighbours=100_000), "lists are 100000 wide"),
+            # a failure's slot is read on the host as the index of what failed: a body 13 of none
+            # raised an IndexError out of the next advance (the 10-minute fuzz)
+            (edited({"solver._fail": np.full_like(good["arrays"]["solver._fail"], 13)}),
+             "solver._fail holds a failure")]:
         with pytest.raises(ValueError, match=why):
             checkpoint.restore(solver, state)
         assert _digest(solver) == before, why

@@ -26,6 +26,7 @@ import math
 import numpy as np
 import warp as wp
 
+from .health import NO_FAILURE
 from .state import BOUNDARY, DT, DT_STABLE, EXCLUDED, FLUID, PASSIVE, TARGET, VACANT, T
 
 # the host values a state carries from its run, each checked for its kind and range; every other
@@ -168,6 +169,10 @@ def _values(solver, arrays: dict, host: dict) -> str:
     for path in ("solver.mass", "solver.rho"):
         if not (arrays[path][held] > 0).all():
             return f"{path} holds a value that is not above 0 for a particle"
+    # a state is of a run that has not failed (a failed run's is not kept), and the host reads a
+    # failure's slot as the index of the particle or body at fault
+    if not (arrays["solver._fail"] == NO_FAILURE).all():
+        return "solver._fail holds a failure: a state is taken from a run that has not failed"
     clock = arrays["solver._clock"]
     if not (np.isfinite(clock[:TARGET]).all() and (clock[[T, DT, DT_STABLE]] >= 0.0).all()):
         return "solver._clock holds a time or step that is not finite and at least 0"
