@@ -102,7 +102,10 @@ def test_an_edited_state_is_refused_whole_and_changes_nothing():
             # a failure's slot is read on the host as the index of what failed: a body 13 of none
             # raised an IndexError out of the next advance (the 10-minute fuzz)
             (edited({"solver._fail": np.full_like(good["arrays"]["solver._fail"], 13)}),
-             "solver._fail holds a failure")]:
+             "solver._fail holds a failure"),
+            # one particle at 1e30 m/s shrank the step until time stood still (the 10-minute fuzz)
+            (edited({"solver.vel": np.where(np.arange(solver.n)[:, None] == 7, np.float32(1e30),
+                                            good["arrays"]["solver.vel"])}), "solver.vel holds a speed of 1.73e\\+30")]:
         with pytest.raises(ValueError, match=why):
             checkpoint.restore(solver, state)
         assert _digest(solver) == before, why

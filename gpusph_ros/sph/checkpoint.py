@@ -36,6 +36,9 @@ CARRIED = {"solver": ("time", "dt", "dt_stable", "steps", "_excluded_host", "_ce
 # host values that say what a cache holds, not the state: never carried or compared
 TRANSIENT = ("_view_fresh",)
 KINDS = (FLUID, BOUNDARY, EXCLUDED, PASSIVE, VACANT)
+# the fastest particle a state may hold, in sound speeds: weakly compressible flow stays far below
+# c0, and a particle at 1e30 m/s (an edited state) shrank the step until time stood still
+SPEED_LIMIT = 10.0
 
 PLAIN = (bool, int, float, str, type(None), np.ndarray, np.generic)
 
@@ -157,8 +160,9 @@ def _indices(solver, arrays: dict) -> str:
 
 def _values(solver, arrays: dict, host: dict) -> str:
     """What in ``arrays`` no run of this solver holds, or "": a particle's h other than a level's
-    (all zero, the clock stood still), a particle's mass or density not above 0, a clock other than the
-    state's time or not a time (only its target may be infinite)."""
+    (all zero, the clock stood still), a particle's mass or density not above 0, a speed above
+    SPEED_LIMIT sound speeds, a failure recorded, a clock other than the state's time or not a time
+    (only its target may be infinite)."""
     # a search's reach follows h; the build's copies are zero until a first build
     for path, levels in (("solver.hsml", solver._level_h), ("neighbours._hsml_sorted", [0.0, *solver._level_h]),
                          ("neighbours._hsml_built", [0.0, *solver._level_h])):
@@ -169,6 +173,11 @@ def _values(solver, arrays: dict, host: dict) -> str:
     for path in ("solver.mass", "solver.rho"):
         if not (arrays[path][held] > 0).all():
             return f"{path} holds a value that is not above 0 for a particle"
+    speed = np.linalg.norm(arrays["solver.vel"][held].astype(np.float64), axis=-1).max(initial=0.0)
+    limit = SPEED_LIMIT * solver.config.sound_speed
+    if speed > limit:
+        return (f"solver.vel holds a speed of {speed:.3g} m/s, above {SPEED_LIMIT:g} c0 = {limit:.3g} m/s: no flow "
+                f"this solver steps moves that fast, and its step would vanish")
     # a state is of a run that has not failed (a failed run's is not kept), and the host reads a
     # failure's slot as the index of the particle or body at fault
     if not (arrays["solver._fail"] == NO_FAILURE).all():
