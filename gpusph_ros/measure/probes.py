@@ -13,7 +13,7 @@ import functools
 import numpy as np
 import warp as wp
 
-from ..sph import kernels, neighbours, state
+from ..sph import eos, kernels, neighbours, state
 from ..sph.state import FLUID
 
 
@@ -26,6 +26,7 @@ def build(scalar):
     Grid, separation, cell_coord, neighbour_cell = N.Grid, N.separation, N.cell_coord, N.neighbour_cell
     S = state.build(scalar)
     Params, Fields = S.Params, S.Fields
+    eos_pressure = eos.build(scalar).pressure
 
     @wp.kernel(enable_backward=False, module="unique")
     def interpolate(p: Params, grid: Grid, start: wp.array(dtype=wp.int32), end: wp.array(dtype=wp.int32),
@@ -33,7 +34,9 @@ def build(scalar):
                     vel: wp.array(dtype=vec), pressure: wp.array(dtype=scalar), rho: wp.array(dtype=scalar),
                     weight: wp.array(dtype=scalar)):
         """The Shepard interpolation at each point with each particle's kernel ``widen`` times as
-        wide (1: the run's own), over the cells that kernel reaches."""
+        wide (1: the run's own), over the cells that kernel reaches. The pressure from each
+        particle's density (thesis Eq. 2.12), which the step loop keeps up to date where the pressure
+        array is not: a sensor reads inside the step (sensors.Transducers)."""
         k = wp.tid()
         x = points[k]
         ci = cell_coord(grid, x)
@@ -62,7 +65,7 @@ def build(scalar):
                                      wp.length(separation(grid, x, f.pos[b])))
                         wv = w * f.mass[b] / f.rho[b]
                         u += wv * f.vel[b]
-                        pr += wv * f.pressure[b]
+                        pr += wv * eos_pressure(f.rho[b], p.rho0, p.eos_b, p.gamma)
                         r += wv * f.rho[b]
                         wsum += wv
         weight[k] = wsum
@@ -96,12 +99,18 @@ class PointProbes:
         self._rho = wp.zeros(k, dtype=solver.scalar, device=dev)
         self._weight = wp.zeros(k, dtype=solver.scalar, device=dev)
 
-    def sample(self) -> dict:
-        """vel (k x 3), pressure, rho, and weight = sum W V (0 where no fluid is within 2h: a dry
-        probe, whose other values are then 0)."""
-        params, fields, nl = self.solver.measurement_view()
+    def launch(self, view):
+        """Interpolate on the device from ``view`` = (params, fields, neighbours) into the arrays
+        ``pressure`` and ``weight`` (and the velocity and density); no host copy."""
+        params, fields, nl = view
         wp.launch(self._interpolate, dim=self.points.shape[0],
                   inputs=[params, nl.grid, nl.cell_start, nl.cell_end, nl.order, fields, self.points, self.widen,
                           self._vel, self._pressure, self._rho, self._weight], device=self.solver.device)
+        return self._pressure, self._weight
+
+    def sample(self) -> dict:
+        """vel (k x 3), pressure, rho, and weight = sum W V (0 where no fluid is within 2h: a dry
+        probe, whose other values are then 0)."""
+        self.launch(self.solver.measurement_view())
         return {"vel": self._vel.numpy().astype(np.float64), "pressure": self._pressure.numpy().astype(np.float64),
                 "rho": self._rho.numpy().astype(np.float64), "weight": self._weight.numpy().astype(np.float64)}

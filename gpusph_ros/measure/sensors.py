@@ -79,12 +79,16 @@ def face_points(position, normal, diameter: float, dx: float, dim: int, tank) ->
     return pts[keep] if keep.any() else c[None, :]
 
 
-def face_pressure(pressure, weight, normal, h, rho0: float, gravity) -> np.ndarray:
-    """The pressure on the face at each point, from the ``pressure`` interpolated OFFSET_H h in
-    front of it (and the kernel ``weight`` there, 0 where dry); ``normal`` and ``h``: one for all
-    points, or one per point."""
-    drop = rho0 * (np.asarray(normal, dtype=np.float64) @ np.asarray(gravity, dtype=np.float64)) * OFFSET_H * h
-    return np.where(np.asarray(weight) > 0.0, np.asarray(pressure) - drop, 0.0)  # p_wall = p - rho0 (g.n) delta
+def face_pressure(pressure, weight, drop) -> np.ndarray:
+    """The pressure on the face at each point from the ``pressure`` and kernel ``weight`` read for it
+    (0 where dry) less ``drop`` (wall_drop: the offset's hydrostatic part where the fluid was read in
+    front of the face, else 0)."""
+    return np.where(np.asarray(weight) > 0.0, np.asarray(pressure) - np.asarray(drop), 0.0)
+
+
+def wall_drop(normals, h, rho0: float, gravity) -> np.ndarray:
+    """rho0 (g . n) delta at each point, delta = OFFSET_H h: p_wall = p(x + delta n) - that."""
+    return rho0 * (np.asarray(normals, dtype=np.float64) @ np.asarray(gravity, dtype=np.float64)) * OFFSET_H * h
 
 
 def smoothed_face_pressure(values: dict) -> np.ndarray:
@@ -106,7 +110,6 @@ class WallPressure:
         self.normals = np.asarray(normals, dtype=np.float64).reshape(-1, 3)
         self.spacing = levels.spacing_at(self.points, cfg.zones, cfg.dx)
         h = cfg.hdx * self.spacing  # as the solver makes its particles' (Solver: hdx x spacing)
-        self._wall = (h, cfg.rho0, cfg.gravity)
         self._kernel = boundaries.model(cfg.boundary).face_pressure(solver.scalar)
         if self._kernel is not None:  # the wall's own pressure is usable
             dev, n = solver.device, len(self.points)
@@ -116,18 +119,25 @@ class WallPressure:
             self._pressure = wp.zeros(n, dtype=solver.scalar, device=dev)
             self._weight = wp.zeros(n, dtype=solver.scalar, device=dev)
             self._probes = None
+            self.drop = np.zeros(n)
         else:
             self._probes = PointProbes(solver, self.points + OFFSET_H * h[:, None] * self.normals)
+            self.drop = wall_drop(self.normals, h, cfg.rho0, cfg.gravity)
 
-    def sample(self) -> np.ndarray:
+    def launch(self, view):
+        """Read every point on the device from ``view`` = (params, fields, neighbours): (pressure,
+        weight) device arrays, the pressure before ``drop`` is taken off (face_pressure)."""
         if self._probes is not None:
-            values = self._probes.sample()
-            return face_pressure(values["pressure"], values["weight"], self.normals, *self._wall)
-        params, fields, nl = self.solver.measurement_view()
+            return self._probes.launch(view)
+        params, fields, nl = view
         wp.launch(self._kernel, dim=len(self.points),
                   inputs=[params, nl.grid, nl.cell_start, nl.cell_end, nl.order, fields, self._pts, self._nrm,
                           self._spacing, self._pressure, self._weight], device=self.solver.device)
-        return np.where(self._weight.numpy() > 0.0, self._pressure.numpy().astype(np.float64), 0.0)
+        return self._pressure, self._weight
+
+    def sample(self) -> np.ndarray:
+        pressure, weight = self.launch(self.solver.measurement_view())
+        return face_pressure(pressure.numpy().astype(np.float64), weight.numpy(), self.drop)
 
 
 def face_load_points(lo, hi, dx: float, dim: int, tank):

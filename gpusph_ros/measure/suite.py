@@ -16,8 +16,9 @@ from .blocks import PressureBlockForce
 from .columns import ColumnMeans
 from .forces import BodyWrench
 from .probes import PointProbes
-from .sensors import SMOOTHED_WIDEN, WallPressure, face_load, face_load_points, face_points, smoothed_face_pressure
-from .surface import elevation, gauge_points
+from .sensors import WallPressure, face_load, face_load_points, face_points
+from .surface import TopLevels, elevation, floor_under, gauge_points
+from .transducers import Transducers
 
 
 class Measurements:
@@ -37,28 +38,30 @@ class Measurements:
         def line_spacing(position):
             return finest_in(*vertical_line(position), cfg.zones, cfg.dx)
         self.scene, self.solver = scene, solver
-        points, self._slices = [], {}
-        # points on wall and body faces, read by WallPressure: the sensors' and the obstacles' faces
-        wall, wall_normals, self._sensors = [], [], {}
-        smoothed, self._smoothed = [], {}  # the sensors that read as the converged reference does
+        points, self._slices, self._floors = [], {}, {}
+        # the obstacles' faces, read by WallPressure at each output; the sensors, read at each step
+        # (transducers.py) by the wall model or as the converged reference reads its own (smoothed)
+        wall, wall_normals = [], []
+        sensors = {"wall": [], "smoothed": []}
+        tops = []  # the gauges that read the top particle
         for probe in scene.probes:
             if probe.type == "point":
                 pts = np.asarray([probe.position])
             elif probe.type == "profile":
                 pts = np.repeat(np.asarray([probe.position]), len(probe.heights), axis=0)
                 pts[:, up] = probe.heights
+            elif probe.type == "gauge" and probe.reading == "top":
+                tops.append(probe)
+                continue
             elif probe.type == "gauge":
                 pts = gauge_points(probe.position, scene.tank[up], line_spacing(probe.position), dim)
+                self._floors[probe.name] = (floor_under(probe.position, scene.obstacles, dim),
+                                            2.0 * cfg.hdx * line_spacing(probe.position))
             elif probe.type == "pressure_sensor":
                 spacing = spacing_at(probe.position, cfg.zones, cfg.dx)[0]
                 pts = face_points(probe.position, probe.normal, probe.diameter, spacing, dim, scene.tank)
-                if probe.reading == "smoothed":
-                    self._smoothed[probe.name] = (len(smoothed), len(smoothed) + len(pts))
-                    smoothed.extend(pts)
-                    continue
-                self._sensors[probe.name] = (len(wall), len(wall) + len(pts))
-                wall.extend(pts)
-                wall_normals.extend([probe.normal] * len(pts))
+                sensors[probe.reading].append((probe.name, pts, [probe.normal] * len(pts), probe.sampling, probe.clip,
+                                               probe.response))
                 continue
             else:
                 continue
@@ -83,7 +86,9 @@ class Measurements:
             wall_normals.extend(normals)
         self._points = PointProbes(solver, points) if points else None
         self._wall = WallPressure(solver, wall, wall_normals) if wall else None
-        self._smoothed_probes = PointProbes(solver, smoothed, widen=SMOOTHED_WIDEN) if smoothed else None
+        self._transducers = [Transducers(solver, found, reading == "smoothed") for reading, found in sensors.items()
+                             if found]
+        self._tops = TopLevels(solver, tops, [line_spacing(p.position) for p in tops]) if tops else None
         columns = [p for p in scene.probes if p.type == "column"]
         self._column_names = [p.name for p in columns]
         self._columns = (ColumnMeans(solver, [p.position for p in columns],
@@ -91,7 +96,7 @@ class Measurements:
 
     def restart(self):
         """Forget what the measurements that average over steps have summed (a restored state)."""
-        for wrench in self._wrenches.values():
+        for wrench in (*self._wrenches.values(), *self._transducers):
             wrench.restart()
 
     def sample(self) -> dict:
@@ -115,17 +120,15 @@ class Measurements:
                 elif probe.type == "profile":
                     out["profiles"][probe.name] = {"heights": pts[:, up], "vel": values["vel"][a:b]}
                 else:
-                    out["gauges"][probe.name] = elevation(pts[:, up], values["weight"][a:b])
+                    out["gauges"][probe.name] = elevation(pts[:, up], values["weight"][a:b], *self._floors[probe.name])
+        if self._tops is not None:
+            out["gauges"].update(self._tops.sample())
         if self._wall is not None:
             p_wall = self._wall.sample()
-            for name, (a, b) in self._sensors.items():
-                out["sensors"][name] = float(np.mean(p_wall[a:b]))  # the transducer: its face's mean
             for name, (a, pts, normals, areas, centre) in self._faces.items():
                 out["pressure_loads"][name] = face_load(p_wall[a:a + len(pts)], pts, normals, areas, centre)
-        if self._smoothed_probes is not None:
-            p_face = smoothed_face_pressure(self._smoothed_probes.sample())
-            for name, (a, b) in self._smoothed.items():
-                out["sensors"][name] = float(np.mean(p_face[a:b]))
+        for transducers in self._transducers:
+            out["sensors"].update(transducers.sample())
         if self._columns is not None:
             values = self._columns.sample()
             for k, name in enumerate(self._column_names):

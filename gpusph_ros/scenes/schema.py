@@ -35,6 +35,14 @@ PROBE_TYPES = ("point", "column", "profile", "gauge", "pressure_sensor")
 # face; ``smoothed``, as De Courcy et al. 2024 read theirs (the fluid at the face, a kernel twice as wide,
 # negative pressures clipped)
 SENSOR_READINGS = ("wall", "smoothed")
+# how a pressure_sensor reports between outputs (measure/transducers.py): ``mean``, over the steps since
+# the last output; ``step``, the output step's reading alone
+SENSOR_SAMPLINGS = ("mean", "step")
+MAX_RESPONSE = 10.0  # [s] a transducer's time constant: longer is no transducer of a wave or an impact
+# how a gauge reads the level (measure/surface.py): ``fraction``, where the fluid's kernel sum along its
+# line first falls below one half above water that stands on the floor (DualSPHysics' GaugeSwl);
+# ``top``, the top of the highest fluid particle within a spacing of its line
+GAUGE_READINGS = ("fraction", "top")
 SCENE_KEYS = ("name", "description", "source", "dim", "tank", "headroom", "lid", "gravity", "depth", "periodic",
               "walls", "fluid", "wet_bed", "obstacles", "refine", "probes", "run", "analysis")
 # a refinement zone's spacing over the scene's dx: each level halves its parent's (scenes/refine.py)
@@ -93,9 +101,11 @@ class Probe:
     """A named gauge. ``point``: kernel-interpolated values at ``position``; ``column``: mean
     velocity of the fluid in a vertical column of radius ``radius_dx`` spacings around the
     horizontal ``position``; ``profile``: point values at ``heights`` above the floor there;
-    ``gauge``: free-surface elevation there; ``pressure_sensor``: a transducer of ``diameter`` [m]
-    centred at ``position`` on a wall or body face whose inward (into the fluid) unit ``normal``
-    is given (measure.sensors). ``position`` and ``normal`` are always stored as 3-vectors."""
+    ``gauge``: free-surface elevation there, read as ``reading`` says (GAUGE_READINGS);
+    ``pressure_sensor``: a transducer of ``diameter`` [m] centred at ``position`` on a wall or body
+    face whose inward (into the fluid) unit ``normal`` is given (measure.sensors), reporting as
+    ``sampling``, ``clip`` and ``response`` say (measure.transducers). ``position`` and ``normal``
+    are always stored as 3-vectors."""
 
     name: str
     type: str
@@ -104,7 +114,10 @@ class Probe:
     heights: tuple = ()
     normal: tuple = ()
     diameter: float = 0.0
-    reading: str = "wall"  # a pressure_sensor's: SENSOR_READINGS (measure/sensors.py)
+    reading: str = "wall"  # a pressure_sensor's: SENSOR_READINGS (measure/sensors.py); a gauge's: GAUGE_READINGS
+    sampling: str = "mean"  # a pressure_sensor's: SENSOR_SAMPLINGS (measure/transducers.py)
+    clip: bool = True  # a pressure_sensor's: gauge pressure, each step's reading clipped at 0
+    response: float = 0.0  # [s] a pressure_sensor's first-order time constant; 0: an ideal transducer
 
 
 @dataclass
@@ -737,8 +750,8 @@ def _probes(probes_in, tank, dim) -> list:
     for name, item in probes_in.items():
         where = f"probes.{name}"
         _name(where, name)
-        item = _mapping(where, item, ("type", "position", "radius_dx", "heights", "normal", "diameter", "reading"),
-                        required=("type", "position"))
+        item = _mapping(where, item, ("type", "position", "radius_dx", "heights", "normal", "diameter", "reading",
+                                      "sampling", "clip", "response"), required=("type", "position"))
         kind = item["type"]
         if kind not in PROBE_TYPES:
             raise ConfigError(f"{where}.type", kind, "one of " + ", ".join(PROBE_TYPES))
@@ -756,7 +769,7 @@ def _probes(probes_in, tank, dim) -> list:
             heights = tuple(_number(f"{where}.heights[{j}]", z, lo=0.0, hi=tank[up]) for j, z in enumerate(raw))
         elif "heights" in item:
             raise ConfigError(f"{where}.heights", item["heights"], "no heights: only profile probes take them")
-        normal, diameter = (), 0.0
+        normal, diameter, reading, sampling, clip, response = (), 0.0, "wall", "mean", True, 0.0
         if kind == "pressure_sensor":
             if "normal" not in item:
                 raise ConfigError(f"{where}.normal", None, f"the face's inward normal, a list of {dim} numbers")
@@ -769,12 +782,23 @@ def _probes(probes_in, tank, dim) -> list:
             reading = item.get("reading", "wall")
             if reading not in SENSOR_READINGS:
                 raise ConfigError(f"{where}.reading", reading, "one of " + ", ".join(SENSOR_READINGS))
+            sampling = item.get("sampling", "mean")
+            if sampling not in SENSOR_SAMPLINGS:
+                raise ConfigError(f"{where}.sampling", sampling, "one of " + ", ".join(SENSOR_SAMPLINGS))
+            clip = item.get("clip", True)
+            if not isinstance(clip, bool):
+                raise ConfigError(f"{where}.clip", clip, "true (gauge pressure, clipped at 0) or false (its sign kept)")
+            response = float(_number(f"{where}.response", item.get("response", 0.0), lo=0.0, hi=MAX_RESPONSE))
         else:
-            for key in ("normal", "diameter", "reading"):
+            if kind == "gauge":
+                reading = item.get("reading", "fraction")
+                if reading not in GAUGE_READINGS:
+                    raise ConfigError(f"{where}.reading", reading, "one of " + ", ".join(GAUGE_READINGS))
+            takes = ("normal", "diameter", "sampling", "clip", "response") + (() if kind == "gauge" else ("reading",))
+            for key in takes:
                 if key in item:
                     raise ConfigError(f"{where}.{key}", item[key], f"no {key}: only pressure_sensor probes take one")
-            reading = "wall"
-        probes.append(Probe(name, kind, position, radius, heights, normal, diameter, reading))
+        probes.append(Probe(name, kind, position, radius, heights, normal, diameter, reading, sampling, clip, response))
     return probes
 
 
