@@ -1,15 +1,16 @@
 """Measurements on a still 2D tank with an obstruction, against hydrostatics: the thesis's
 pressure blocks (Section 3.2) give rho0 g d^2 / 2 per unit depth on each face and no net force,
 the depth-averaged column (Section 3.3) the mean of a linear velocity profile, the surface gauge
-the stated depth, also under spray. The state is the scene's hydrostatic start; nothing is stepped."""
+the stated depth, also under spray, and nothing for spray over a dry floor. The state is the scene's hydrostatic start; nothing is stepped."""
 import numpy as np
 import pytest
 
 from gpusph_ros.measure.blocks import PressureBlockForce, face_blocks
 from gpusph_ros.measure.columns import ColumnMeans
 from gpusph_ros.measure.suite import Measurements
+from gpusph_ros.measure.surface import elevation, floor_under
 from gpusph_ros.scenes.build import build
-from gpusph_ros.scenes.schema import parse_scene
+from gpusph_ros.scenes.schema import Obstacle, parse_scene
 from gpusph_ros.sph import Solver
 
 pytestmark = pytest.mark.physics
@@ -77,3 +78,33 @@ def test_surface_gauge_reads_the_stated_depth(still_tank):
     assert sample["gauges"]["eta"] == pytest.approx(DEPTH, abs=0.25 * DX)
     assert sample["columns"]["col"]["vel"][0] == pytest.approx(0.74, rel=1e-9)
     assert sample["blocks"]["wall"][0.0][1] == pytest.approx(1000.0 * G * DEPTH ** 2 / 2, rel=0.01)
+
+
+def test_spray_over_a_dry_floor_is_no_water_at_the_gauge():
+    # a blob 4 cm thick 30 cm above the dry floor at the gauge (water only beyond the wall): the
+    # level reads 0, as a dry gauge; a gauge that reads the top particle sees the blob's top
+    scene = {**TANK, "tank": [0.6, 0.4],
+             "fluid": [TANK["fluid"][1], {"name": "spray", "lo": [0.12, 0.30], "hi": [0.18, 0.34]}],
+             "probes": {"eta": {"type": "gauge", "position": [0.15]},
+                        "top": {"type": "gauge", "position": [0.15], "reading": "top"},
+                        "beyond": {"type": "gauge", "position": [0.48]},
+                        "beyond_top": {"type": "gauge", "position": [0.48], "reading": "top"}}}
+    model = build(parse_scene(scene), dx=DX, precision="float64", boundary="lennard_jones")
+    gauges = Measurements(Solver(model.config, model.particles), model).sample()["gauges"]
+    assert gauges["eta"] == 0.0
+    assert gauges["top"] == pytest.approx(0.34, abs=0.25 * DX)
+    assert gauges["beyond"] == pytest.approx(DEPTH, abs=0.25 * DX)
+    assert gauges["beyond_top"] == pytest.approx(DEPTH, abs=0.25 * DX)
+
+
+def test_water_on_an_obstacles_top_is_read_from_the_top_not_the_tank_floor():
+    # a line through a solid block 0.28 m tall reads water standing 4 cm deep on it (the block's
+    # top is the floor under the gauge), where over the tank's floor it would be spray
+    heights = np.arange(0.0, 0.4, DX / 4)
+    weight = np.where((heights > 0.281) & (heights < 0.318), 1.0, 0.0)
+    reach = 2 * 1.3 * DX
+    assert elevation(heights, weight, floor=0.0, reach=reach) == 0.0
+    assert elevation(heights, weight, floor=floor_under((0.15, 0.0, 0.0), [Obstacle("b", (0.1, 0.0, 0.0),
+                                                                                        (0.2, 0.28, 0.0))], 2),
+                     reach=reach) == pytest.approx(0.3175, abs=DX / 4)
+    assert floor_under((0.25, 0.0, 0.0), [Obstacle("b", (0.1, 0.0, 0.0), (0.2, 0.28, 0.0))], 2) == 0.0
