@@ -1,8 +1,10 @@
 """Every measurement a scene asks for, taken together at an output step: point, profile and gauge
-probes (one interpolation launch for all their points), pressure sensors and the obstacles' faces
-(one wall-pressure launch, sensors.WallPressure), depth-averaged columns, the wrench on each
-obstacle, its pressure-block force and the load of the wall pressure over its faces. Computed on
-the solver's device; only the results come to the host.
+probes (one interpolation launch for all their points; a gauge reading the top particle, one
+launch for all of them), the obstacles' faces (one wall-pressure launch, sensors.WallPressure),
+depth-averaged columns, the wrench on each obstacle, its pressure-block force and the load of the
+wall pressure over its faces. The pressure sensors and the wrenches are read at every step and
+report the mean over the steps since the last output (transducers.py, forces.py). Computed on the
+solver's device; only the results come to the host.
 
 With refinement zones each measurement samples at the spacing of the finest level where it stands
 (a gauge's line, a sensor's face and a body's faces every fraction of that spacing, a column's
