@@ -191,6 +191,8 @@ class Numerics:
     shifting: bool = setting(False, "particle shifting (Lind et al. 2012); off by default, as in DualSPHysics")
     shift_coef: float = setting(-2.0, "shifting's A, DualSPHysics' ShiftCoef")
     shift_tfs: float = setting(0.0, "free-surface threshold of div r; 0 = DualSPHysics' 1.5 in 2D, 2.75 in 3D")
+    cavitation: bool = setting(False, "the fluid cavitates at ambient pressure: its density never falls below rho0, "
+                                      "so it holds no tension (docs/solver.md)")
     shepard_every: int = setting(0, "steps between Shepard filters (thesis Eq. 2.28 used 40); 0 = off")
     rho0: float = setting(1000.0, "reference density [kg/m^3]")
     gamma: float = setting(7.0, "Tait exponent (thesis Eq. 2.12)")

@@ -8,6 +8,8 @@
 - density: the Tait law inverted, rho = rho0 (1 + p / B)^(1 / gamma), within the fluid's density
   bounds (health.py): the density of a wall particle whose pressure a boundary model sets (mDBC,
   extrapolated-pressure walls);
+- cavitation_floor: a fluid that cavitates at ambient pressure (the run setting ``cavitation``)
+  keeps rho >= rho0, so p >= 0: air at ambient fills what would be stretched;
 - hydrostatic_density: the Tait law inverted at p = rho0 g d, for the initial state;
   hydrostatic_depth, the depth d at which a fluid at rest has density rho (p(rho) / (rho0 g)).
 """
@@ -21,7 +23,8 @@ import warp as wp
 
 def params(cfg) -> dict:
     """The Params fields of the equation of state of ``cfg`` (a SolverConfig): rho0, B, gamma, c0."""
-    return {"rho0": cfg.rho0, "eos_b": cfg.eos_b, "gamma": cfg.gamma, "c0": cfg.sound_speed}
+    return {"rho0": cfg.rho0, "eos_b": cfg.eos_b, "gamma": cfg.gamma, "c0": cfg.sound_speed,
+            "rho_floor": cfg.rho0 if cfg.cavitation else 0.0}
 
 
 @functools.lru_cache(maxsize=None)
@@ -36,6 +39,12 @@ def build(scalar):
                 + b * (scalar(1.0) / rho - scalar(1.0) / rho0))
 
     @wp.func
+    def cavitation_floor(rho: scalar, floor: scalar) -> scalar:
+        """A fluid particle's density no lower than ``floor`` (Params.rho_floor: rho0 where the fluid
+        cavitates, else 0): its Tait pressure is then never below ambient."""
+        return wp.max(rho, floor)
+
+    @wp.func
     def density(pressure: scalar, rho0: scalar, b: scalar, gamma: scalar, rho_min: scalar, rho_max: scalar) -> scalar:
         """The density whose Tait pressure is ``pressure``, within [rho_min, rho_max]."""
         base = scalar(1.0) + pressure / b
@@ -43,7 +52,8 @@ def build(scalar):
             return rho_min
         return wp.clamp(rho0 * wp.pow(base, scalar(1.0) / gamma), rho_min, rho_max)
 
-    return SimpleNamespace(pressure=pressure, elastic_energy=elastic_energy, density=density)
+    return SimpleNamespace(pressure=pressure, elastic_energy=elastic_energy, density=density,
+                           cavitation_floor=cavitation_floor)
 
 
 def hydrostatic_density(depth, rho0: float, b: float, gamma: float, g: float):

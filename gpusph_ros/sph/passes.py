@@ -55,7 +55,8 @@ def _force_passes(scalar):
     K = kernels.build(scalar)
     kernel_w, grad_factor, smoothing, own_scale, same_level = K.w, K.grad_factor, K.smoothing, K.own_scale, K.same_level
     stride, selected = K.stride, K.selected
-    eos_pressure = eos.build(scalar).pressure
+    E = eos.build(scalar)
+    eos_pressure, cavitation_floor = E.pressure, E.cavitation_floor
     pressure_gradient = momentum.build(scalar).pressure_gradient
     V = viscosity.build(scalar)
     visc_artificial, visc_laminar, sps_stress, sps_accel = V.artificial, V.laminar, V.sps_stress, V.sps_accel
@@ -301,7 +302,7 @@ def _force_passes(scalar):
         if f.ptype[i] != FLUID:
             rho_out[i] = f.rho[i]
             return
-        rho_out[i] = shepard_density(p, grid, nb, i, f)
+        rho_out[i] = cavitation_floor(shepard_density(p, grid, nb, i, f), p.rho_floor)
 
     return SimpleNamespace(equation_of_state=equation_of_state, sps_strain=sps_strain, interact=interact,
                            wall_energy=wall_energy,
@@ -316,6 +317,7 @@ def _time_passes(scalar):
     Params = state.build(scalar).Params
     healthy = health.build(scalar).healthy
     capped = shifting.build(scalar).capped
+    cavitation_floor = eos.build(scalar).cavitation_floor
     K = kernels.build(scalar)
     own_scale, stride, selected = K.own_scale, K.stride, K.selected
 
@@ -361,8 +363,9 @@ def _time_passes(scalar):
                   xsph: wp.array(dtype=vec), shift: wp.array(dtype=vec), pos_out: wp.array(dtype=vec),
                   vel_out: wp.array(dtype=vec), rho_out: wp.array(dtype=scalar), levels: int):
         """x_out = x + f dt (u_rate + xsph) [+ the shift f dt s, capped], u_out = u + f dt a,
-        rho_out = rho + f dt drho, for the particles of ``levels`` (kernels.selected), dt each one's
-        own step (kernels.stride finest-level steps).
+        rho_out = rho + f dt drho (a fluid's no lower than rho0 where it cavitates: eos.cavitation_floor),
+        for the particles of ``levels`` (kernels.selected), dt each one's own step (kernels.stride
+        finest-level steps).
 
         f = 1/2 with the rates at n (predictor), f = 1 with the rates at n + 1/2 (corrector).
         Boundary particles keep position and velocity; dynamic ones update density. A passive
@@ -377,6 +380,7 @@ def _time_passes(scalar):
             pos_out[i] = pos[i]
             vel_out[i] = vel[i]
             return
+        rho_out[i] = cavitation_floor(rho_out[i], p.rho_floor)
         x = pos[i] + dt * (vel_rate[i] + xsph[i])
         if p.shift_a_h != scalar(0.0):
             x += capped(dt * shift[i], p.shift_cap * own_scale(p, hsml[i]))

@@ -77,6 +77,7 @@ def build(scalar):
         shift_tfs: scalar  # the free-surface threshold of div r
         shift_cap: scalar  # 0.1 dx: the largest shift of one step along an axis
         rho0: scalar
+        rho_floor: scalar  # eos.cavitation_floor: rho0 where the fluid cavitates, else 0
         eos_b: scalar
         gamma: scalar
         c0: scalar
