@@ -1,16 +1,11 @@
-"""A thin sheet of water sliding over a horizontal plate and off its sharp edge, in 3D: where its
-pressure is known (issue 56). On the plate the sheet is hydrostatic, rho g d at its bottom (d its
-depth, 3 spacings); off the edge it falls freely and its pressure is ambient, 0. A fluid in tension
-there reads what no sheet of water holds.
-
-The tank is 1.0 m long, 9 spacings wide and periodic across (a sheet of unbounded width in a 3D
-kernel), 0.5 m tall; the plate fills x < 0.6 m up to 0.3 m; the sheet, ``--depth`` spacings deep,
-fills x < 0.5 m on it and starts at ``--speed`` along x (U). At each output: the lowest and the
-1st-percentile pressure of the fluid over the plate and of the fluid in the air beyond its edge
-(at least 0.1 m above the floor, before it lands), and three sensors on the plate's top under the
-sheet (x = 0.15, 0.30, 0.45 m; the transducers' mean over the steps, clipped at 0, and their raw
-step readings). The limits of the issue: a sensor's mean no lower than -5% of rho g d; the fluid's
-pressure in the sheet no lower than -0.1 rho U^2 / 2.
+"""A thin sheet of water sliding over a horizontal plate and off its sharp edge, in 3D
+(scenes.exact.thin_sheet): where its pressure is known (issue 56). On the plate the sheet is
+hydrostatic, rho g d at its bottom (d its depth, 3 spacings); off the edge it falls freely and its
+pressure is ambient, 0. At each output: the lowest and the 1st-percentile pressure of the fluid over
+the plate and of the fluid in the air beyond its edge (at least 0.1 m above the floor, before it
+lands), and the plate's sensors under the sheet (the transducers' mean over the steps, clipped at
+0, and their raw step readings). The issue's limits: a sensor's mean no lower than -5% of rho g d;
+the fluid's pressure in the sheet no lower than -0.1 rho U^2 / 2.
 
     python bench/thin_sheet.py [--dx 0.01] [--depth 3] [--speed 1.0] [--end 0.5] [--set KEY=VALUE ...]
 """
@@ -19,27 +14,7 @@ import argparse
 import numpy as np
 import yaml
 
-PLATE_END, PLATE_TOP, SHEET_START, SHEET_END = 0.6, 0.3, 0.1, 0.55
-SENSOR_X = (0.25, 0.40, 0.55)
-
-
-def scene(dx: float, depth: int):
-    from gpusph_ros.scenes.schema import parse_scene
-
-    top = PLATE_TOP + depth * dx
-    width = 9 * dx  # a periodic axis is at least 3.3 kernel supports long (sph.config)
-    probes = {}
-    for x in SENSOR_X:
-        sensor = {"type": "pressure_sensor", "position": [x, width / 2, PLATE_TOP], "normal": [0, 0, 1],
-                  "diameter": 2 * dx}
-        probes[f"plate_{round(x * 100)}cm"] = sensor
-        probes[f"plate_{round(x * 100)}cm_raw"] = {**sensor, "sampling": "step", "clip": False}
-    return parse_scene({
-        "name": "thin_sheet", "dim": 3, "tank": [1.0, width, 0.5], "depth": top, "walls": "particles",
-        "periodic": [False, True, False],
-        "fluid": [{"name": "sheet", "lo": [SHEET_START, 0.0, PLATE_TOP], "hi": [SHEET_END, width, top]}],
-        "obstacles": [{"name": "plate", "lo": [0.0, 0.0, 0.0], "hi": [PLATE_END, width, PLATE_TOP]}],
-        "probes": probes})
+from gpusph_ros.scenes.exact import PLATE_END, PLATE_TOP, SHEET_SENSORS as SENSOR_X, SHEET_START, thin_sheet
 
 
 def main():
@@ -61,7 +36,7 @@ def main():
     from gpusph_ros.scenes.settings import resolve
     from gpusph_ros.sph.state import FLUID
 
-    sc = scene(args.dx, args.depth)
+    sc = thin_sheet(args.dx, args.depth)
     extra = {k: yaml.safe_load(v) for k, v in (item.split("=", 1) for item in args.set)}
     built = build_run(sc, resolve(sc, dx=args.dx, end_time=args.end, **extra))
     fluid = built.particles.ptype == FLUID

@@ -6,6 +6,10 @@ An impinging jet: a 2D block of fluid b wide moving at U onto a wall of boundary
 without gravity. Once the water-hammer transient of the first contact has passed and until the
 jet's tail arrives, momentum gives the force per unit depth rho U^2 b, and the stagnation point
 carries rho U^2 / 2 (Milne-Thomson, Theoretical Hydrodynamics, Section 11.52).
+
+A thin sheet: in 3D, water ``depth`` spacings deep sliding at U over a horizontal plate and off its
+sharp edge (issue 56). On the plate it is hydrostatic, rho g d at its bottom; off the edge it falls
+freely at ambient pressure, 0: a fluid in tension there reads what no sheet of water holds.
 """
 import numpy as np
 
@@ -18,6 +22,35 @@ GAP = 0.02  # [m] between the jet's head and the wall's face at t = 0
 # after the window, no sheet turning round an end into the wall's back
 WALL_HALF = 1.5
 C0 = 15.0  # [m/s] the sound speed, 15 U: density within about 0.5% in the steady jet
+
+
+# the thin sheet [m]: the plate fills x < PLATE_END up to PLATE_TOP, the sheet SHEET_START < x < SHEET_END on it
+PLATE_END, PLATE_TOP, SHEET_START, SHEET_END = 0.6, 0.3, 0.1, 0.55
+SHEET_SENSORS = (0.25, 0.40, 0.55)  # [m] x of the plate's sensors under the sheet, on its centre line
+
+
+def thin_sheet(dx: float, depth: int = 3):
+    """The thin sheet's scene (a schema Scene): a tank 1.0 m long, 0.5 m tall and 9 spacings wide,
+    periodic across (a sheet of unbounded width in a 3D kernel; a periodic axis is at least 3.3
+    kernel supports long); the plate an obstacle; on its top two sensors 2 spacings across at each
+    of SHEET_SENSORS, ``plate_<x in cm>cm`` (the default transducer) and ``..._raw`` (each step's
+    reading, its sign kept). The sheet starts at rest: give its fluid the speed U
+    (``Model.particles.vel``) before the solver is made."""
+    from .schema import parse_scene
+
+    top, width = PLATE_TOP + depth * dx, 9 * dx
+    probes = {}
+    for x in SHEET_SENSORS:
+        sensor = {"type": "pressure_sensor", "position": [x, width / 2, PLATE_TOP], "normal": [0, 0, 1],
+                  "diameter": 2 * dx}
+        probes[f"plate_{round(x * 100)}cm"] = sensor
+        probes[f"plate_{round(x * 100)}cm_raw"] = {**sensor, "sampling": "step", "clip": False}
+    return parse_scene({
+        "name": "thin_sheet", "dim": 3, "tank": [1.0, width, 0.5], "depth": top, "walls": "particles",
+        "periodic": [False, True, False],
+        "fluid": [{"name": "sheet", "lo": [SHEET_START, 0.0, PLATE_TOP], "hi": [SHEET_END, width, top]}],
+        "obstacles": [{"name": "plate", "lo": [0.0, 0.0, 0.0], "hi": [PLATE_END, width, PLATE_TOP]}],
+        "probes": probes})
 
 
 def impinging_jet(per_width: int, boundary: str = "dynamic", **settings):
