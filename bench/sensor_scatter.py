@@ -55,10 +55,11 @@ def main():
             p = np.asarray(record["series"][f"sensors/{name}"])[inside]
             mean = float(np.mean(p))
             scatter = float(np.sqrt(np.mean(np.diff(p) ** 2)) / mean) if mean > 0.0 else float("nan")
-            rows.append({"dx": args.dx, "height_m": z, "reading": reading, "window_s": f"{args.window[0]}-{args.window[1]}",
-                         "mean_pa": round(mean, 1), "scatter_of_mean": round(scatter, 3), "min_pa": round(float(p.min()), 1),
-                         "particles": record["particles"], "steps": record["steps"], "wall_s": round(record["wall_s"], 1),
-                         "status": record["status"]})
+            rows.append({"dx": args.dx, "height_m": z, "reading": reading,
+                         "window_s": f"{args.window[0]}-{args.window[1]}", "mean_pa": round(mean, 1),
+                         "scatter_of_mean": round(scatter, 3), "min_pa": round(float(p.min()), 1),
+                         "particles": record["particles"], "steps": record["steps"],
+                         "wall_s": round(record["wall_s"], 1), "status": record["status"]})
             print(f"{z:.2f} m {reading:10s} mean {mean:8.1f} Pa  scatter {100 * scatter:6.1f}%  min {p.min():8.1f} Pa")
     out = Path(args.out)
     new = not out.exists()

@@ -14,7 +14,8 @@ import argparse
 import numpy as np
 import yaml
 
-from gpusph_ros.scenes.exact import PLATE_END, PLATE_TOP, SHEET_SENSORS as SENSOR_X, SHEET_START, thin_sheet
+from gpusph_ros.scenes.exact import PLATE_END, PLATE_TOP, SHEET_START, thin_sheet
+from gpusph_ros.scenes.exact import SHEET_SENSORS as SENSOR_X
 
 
 def main():
@@ -77,8 +78,8 @@ def main():
     for x0, rows in sensors.items():
         t, mean, raw = np.asarray(rows).T
         covered = t < (x0 - SHEET_START) / args.speed  # until the sheet's tail passes
-        print(f"sensor at x = {x0} m: while covered, mean {mean[covered].mean():.1f} Pa (raw {raw[covered].mean():.1f}, lowest raw "
-              f"{raw[covered].min():.1f}) against rho g d {rho_g_d:.1f}")
+        print(f"sensor at x = {x0} m: while covered, mean {mean[covered].mean():.1f} Pa (raw "
+              f"{raw[covered].mean():.1f}, lowest raw {raw[covered].min():.1f}) against rho g d {rho_g_d:.1f}")
 
 
 if __name__ == "__main__":

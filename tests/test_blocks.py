@@ -1,7 +1,8 @@
 """Measurements on a still 2D tank with an obstruction, against hydrostatics: the thesis's
 pressure blocks (Section 3.2) give rho0 g d^2 / 2 per unit depth on each face and no net force,
 the depth-averaged column (Section 3.3) the mean of a linear velocity profile, the surface gauge
-the stated depth, also under spray, and nothing for spray over a dry floor. The state is the scene's hydrostatic start; nothing is stepped."""
+the stated depth, also under spray, and nothing for spray over a dry floor. The state is the
+scene's hydrostatic start; nothing is stepped."""
 import numpy as np
 import pytest
 

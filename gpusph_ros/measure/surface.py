@@ -129,4 +129,5 @@ class TopLevels:
         wp.launch(self._kernel, dim=s.n, inputs=[s.config.dim - 1, self._centres, self._radius2, s.pos, s.ptype,
                                                  self._top], device=s.device)
         top = self._top.numpy().astype(np.float64)
-        return {name: float(t + self.half[k]) if t > 0.5 * DRY else 0.0 for k, (name, t) in enumerate(zip(self.names, top))}
+        return {name: float(t + self.half[k]) if t > 0.5 * DRY else 0.0
+                for k, (name, t) in enumerate(zip(self.names, top))}
