@@ -30,6 +30,7 @@ from .scenes.build import build_run, priced
 from .scenes.settings import check_output
 from .sph import ConfigError, bodies, checkpoint
 from .sph.config import shown
+from .sph.device import choice
 
 NAMESPACE = "/sim_node"
 WRENCH_TIMEOUT = 0.5  # [s] of simulated time an external wrench on a floating body is held
@@ -143,8 +144,14 @@ class Run:
         return (f"{self.scene.name}{model}: dx = {cfg.dx:g} m, {self.solver.n} particles "
                 f"({self.model.fluid_particles} fluid), "
                 f"{cfg.kernel} kernel, {cfg.viscosity} viscosity, {cfg.boundary} boundaries, {cfg.density_diffusion} "
-                f"density diffusion, {cfg.precision} on {self.solver.device}; to t = {self.output.end_time:g} s, "
+                f"density diffusion, {cfg.precision} on {self.solver.device}"
+                f"{self.device_choice and f' ({self.device_choice})'}; to t = {self.output.end_time:g} s, "
                 f"outputs at {self.output.output_rate:g} Hz")
+
+    @property
+    def device_choice(self) -> str:
+        """Why ``device: auto`` chose the device the run steps on; "" where the run named it."""
+        return choice(self.run_config.solver.device, str(self.solver.device))
 
     @property
     def particles_topic(self) -> str:

@@ -18,6 +18,7 @@ from ..scenes.reduce import MODELS
 from ..scenes.schema import FRAME_ID, MAX_FRAME_ID, MAX_PATH, builtin_names, load_scene
 from ..scenes.settings import COMPRESSIONS, STAMPS, resolve
 from ..sph.config import LIVE, RESET, ConfigError, SolverConfig, shown
+from ..sph.device import AUTO
 
 # when a change takes effect: RESET (needs new particles or buffers: at the next ~/reset) and LIVE
 # (from the next step or output) as the solver's settings say, and
@@ -113,7 +114,7 @@ def applies_text(name: str) -> str:
 def _device_names() -> list:
     import warp as wp
 
-    return [d.alias for d in wp.get_devices()]
+    return [AUTO] + [d.alias for d in wp.get_devices()]
 
 
 # the longest text a parameter takes: a path (Linux's PATH_MAX), a frame id (schema.MAX_FRAME_ID)

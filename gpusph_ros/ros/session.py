@@ -95,7 +95,8 @@ class Session:
             rtf = (solver.time - window[2]) / (now - window[0])
         out.update(scene=run.scene.name, simulated_time=solver.time, dt=solver.dt, particles=solver.n,
                    steps=solver.steps, steps_per_s=steps_per_s, mipps=steps_per_s * solver.n / 1e6,
-                   real_time_factor=rtf, device=str(solver.device), precision=run.model.config.precision,
+                   real_time_factor=rtf, device=str(solver.device), device_choice=run.device_choice,
+                   precision=run.model.config.precision,
                    end_time=run.output.end_time, **run.exclusions(), **solver.health_peaks)
         return out
 

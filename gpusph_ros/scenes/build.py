@@ -13,6 +13,7 @@ import numpy as np
 
 from ..sph import bodies, boundaries
 from ..sph.config import ConfigError, Plane, SolverConfig, check_device
+from ..sph.device import chosen_device
 from ..sph.eos import hydrostatic_density, hydrostatic_depth
 from ..sph.particles import Particles
 from ..sph.solver import Solver
@@ -105,7 +106,7 @@ def priced(scene: Scene, run_config) -> tuple:
     zones) under ``run_config``: what a run costs, from the scene alone, nothing built."""
     cfg = run_config.solver
     reduced = reduce.apply(scene, run_config.reduction, run_config.output.end_time, cfg.dx, cfg.hdx)
-    cfg = scene_config(reduced, cfg)
+    cfg = scene_config(reduced, cfg).replace(device=chosen_device(cfg.device))
     return reduced, cfg, resources.particle_bound(reduced, cfg, fluid_boxes(reduced))
 
 
@@ -164,6 +165,7 @@ def build_from(scene: Scene, cfg: SolverConfig) -> Model:
     cfg = scene_config(scene, cfg)
     dx = cfg.dx
     boxes = fluid_boxes(scene)
+    cfg = cfg.replace(device=chosen_device(cfg.device))
     check_device(cfg.device)
     resources.check(scene, cfg, boxes)  # before anything is allocated
     cfg, parts = box_tank(cfg, scene.tank[:dim], boxes, walls=scene.walls, headroom=scene.headroom)

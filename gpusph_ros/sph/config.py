@@ -211,8 +211,9 @@ class Numerics:
     settle_until: float = setting(0.0, "settling ends at this time [s]")
     precision: str = setting("float32", "floating-point precision of the solver state", choices=PRECISIONS,
                              applies=RESET, node=True)
-    device: str = setting(None, "Warp device: cpu or cuda:N (default: $GPUSPH_ROS_DEVICE, else cpu: the GPU path "
-                                "is written for CUDA but has not yet run on a GPU, docs/results/speed.md)",
+    device: str = setting(None, "Warp device: cpu, cuda:N, or auto (the first CUDA device Warp sees, else cpu); "
+                                "default $GPUSPH_ROS_DEVICE, else cpu: the GPU path is written for CUDA but has "
+                                "not yet run on a GPU, docs/results/speed.md",
                           applies=RESET, node=True, factory=default_device)
     cpu_threads: int = setting(0, "threads for the heavy passes on a CPU device; 0 = every core", applies=RESET)
     neighbour_search: str = setting("auto", "how a pass finds a particle's neighbours (sph/neighbours.py): lists "

@@ -31,6 +31,7 @@ from . import (
     xsph,
 )
 from .config import RESET_FIELDS, SolverConfig, check_device
+from .device import chosen_device
 from .health import HealthError
 from .kernels import COARSER_LEVELS, EVERY_LEVEL, FINEST_LEVEL
 from .launch import Launcher
@@ -79,7 +80,7 @@ class Solver:
 
     def __init__(self, config: SolverConfig, particles: Particles, max_neighbours: "int | None" = None,
                  body_names: "list | None" = None):
-        self.config = config.validate()
+        self.config = config.replace(device=chosen_device(config.device)).validate()
         # each body's name by id, for what a report says of it (the scene's obstacles)
         self.body_names = list(body_names) if body_names else [f"body {k}" for k in range(len(config.motions))]
         cfg = self.config
