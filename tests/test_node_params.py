@@ -24,7 +24,7 @@ def test_the_issue_list_of_parameters_is_declared():
                      "device", "cfl", "c0", "end_time", "output_rate", "real_time_factor", "publish_particles",
                      "particle_fields", "record_dir", "frame_id", "autostart", "model", "crop", "wall_planes",
                      "max_excluded_fraction", "max_left_fraction", "mdbc_slip", "visco_bound_factor", "compression",
-                     "stamps", "state_file"}
+                     "stamps", "state_file", "clock", "max_lag"}
     for p in PARAMS:
         assert p.description and p.applies in (node_params.RESET, node_params.LIVE, node_params.RECORDING,
                                                node_params.STARTUP, node_params.SERVICE)
@@ -127,3 +127,11 @@ def test_a_scene_that_reset_would_refuse_is_refused_when_set(tmp_path):
                     "fluid:\n  - {name: sea, lo: [0, 0], hi: [1.0e+300, 0.5]}\n")
     reason = check(_values(scene=str(path)), changed={"scene": str(path)})
     assert reason is not None and reason.startswith("dx: ") and "particles" in reason, reason
+
+
+def test_the_clock_parameters_refuse_bad_values_naming_the_field():
+    assert check(_values(clock="follow")) is None and check(_values(clock="none")) is None
+    assert check(_values(clock="maybe"), ["clock"]).startswith("clock: 'maybe' is not one of publish, follow, none")
+    assert check(_values(max_lag=-1.0), ["max_lag"]).startswith("max_lag: -1.0 is outside [0, 1000]")
+    # the followed clock's time is the simulated time: epoch stamps would be another clock
+    assert check(_values(clock="follow", stamps="epoch")).startswith("clock: follow takes the followed clock's time")

@@ -58,6 +58,9 @@ def _solver_params() -> tuple:
     return tuple(out)
 
 
+# the parameter clock: what the node does with /clock; "none", not "off": ROS reads parameters as YAML
+# 1.1, where `clock:=off` is the boolean false
+CLOCKS = ("publish", "follow", "none")
 SOLVER_PARAMS = _solver_params()
 PARAMS = (
     Param("scene", "dambreak1_thesis", "built-in scene name (" + ", ".join(builtin_names()) + ") or a path "
@@ -76,6 +79,12 @@ PARAMS = (
     Param("end_time", 0.0, "simulated time the run stops at [s]; 0 = the scene's own", LIVE, lo=0.0, hi=1.0e5),
     Param("output_rate", 0.0, "outputs per simulated second [Hz]: /clock, probes, wrenches and particles; "
           "0 = the scene's own", LIVE, lo=0.0, hi=1.0e4),
+    Param("clock", "publish", "the /clock topic: publish (the fluid's simulated time), follow (take /clock from "
+          "another publisher, a robot simulator's, and advance the fluid to each time it receives, never past it; a "
+          "clock that goes back resets the run) or none (no clock: a recording-only run)", STARTUP, choices=CLOCKS),
+    Param("max_lag", 0.1, "under clock: follow, how far the fluid may fall behind the followed clock [s] before "
+          "the node warns (once; /diagnostics counts each clock message after that with the fluid further behind)",
+          LIVE, lo=0.0, hi=1.0e3),
     Param("real_time_factor", 0.0, "simulated seconds per wall second the node keeps to at most; 0 = as fast "
           "as possible", LIVE, lo=0.0, hi=1.0e3),
     Param("publish_particles", True, "build and publish the particle cloud at each output (and record it)", LIVE),
@@ -101,7 +110,7 @@ DEFAULTS = {p.name: p.default for p in PARAMS}
 # the node's pacing. A LIVE parameter comes to the settings of the same name, except those below.
 LIVE_SETTINGS = {**{p.name: "solver" for p in SOLVER_PARAMS if p.applies == LIVE}, "viscosity": "solver",
                  "end_time": "output", "output_rate": "output", "particle_rate": "output", "particle_fields": "cloud",
-                 "frame_id": "cloud", "real_time_factor": "pace"}
+                 "frame_id": "cloud", "real_time_factor": "pace", "max_lag": "pace"}
 _SETTINGS_OF = {"sps": ("viscosity",), "publish_particles": ("particle_rate",)}
 
 
@@ -155,6 +164,9 @@ def check(values: dict, changed=None):
         reason = _check_one(BY_NAME[name], values[name])
         if reason:
             return reason
+    if values["clock"] == "follow" and values["stamps"] != "simulated":
+        return ("clock: follow takes the followed clock's time as the simulated time; it needs stamps simulated, "
+                f"not {values['stamps']!r}")
     if values["sps"] and values["viscosity"] != "laminar":
         return (f"sps: true needs viscosity laminar (SPS adds the sub-particle-scale stress to laminar "
                 f"viscosity); viscosity is {values['viscosity']!r}")

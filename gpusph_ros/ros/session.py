@@ -45,6 +45,15 @@ class Session:
         self._stepper = False  # a ~/step is waiting for its output
         self._generation = 0  # bumped when what a waiting ~/step aims at changes (outputs, run, close)
         self._pace = None  # (wall, simulated time) the real-time factor counts from
+        # clock: follow (sim_node): the followed clock's last time, None before its first message or
+        # when not following; the fluid never steps past it
+        self.following = False
+        self._limit = None
+        self.max_lag = 0.1
+        self._fluid_t = 0.0  # the fluid's time at its last output
+        self._lag_worst = 0.0
+        self._lag_over = 0  # clock messages with the fluid more than max_lag behind, after the warning
+        self._lag_warned = False
         self._window = None
         self._thread = threading.Thread(target=self._loop, name="solver", daemon=True)
         self._thread.start()
@@ -74,6 +83,11 @@ class Session:
         run = self.run
         if run is None or self.failure or run.done or self._hold:
             return False
+        if self.following and not self._stepping():
+            # the next output only once the followed clock has reached it
+            limit = self._limit
+            if limit is None or run.next_output / run.output.output_rate > limit + 1e-9:
+                return False
         return self._stepping() or (self.active and not self.paused)
 
     def _interrupted(self) -> bool:
@@ -85,6 +99,11 @@ class Session:
         run = self.run
         out = {"state": self.state, "error": self.failure,
                "recording": str(self.recorder.path) if self.recorder else ""}
+        if self.following:
+            limit = self._limit
+            out.update(clock_followed=-1.0 if limit is None else limit,
+                       clock_lag=0.0 if limit is None else max(limit - self._fluid_t, 0.0),
+                       clock_lag_worst=self._lag_worst, clock_lag_over=self._lag_over)
         if run is None:
             return out
         solver, now = run.solver, time.perf_counter()
@@ -130,6 +149,8 @@ class Session:
         if "real_time_factor" in changes:
             self.real_time_factor = changes.pop("real_time_factor")
             self._pace = None
+        if "max_lag" in changes:
+            self.max_lag = changes.pop("max_lag")
         if run is None:
             return
         numerics = {k: v for k, v in changes.items() if LIVE_SETTINGS[k] == "solver"}
@@ -169,6 +190,7 @@ class Session:
                                   f"{err}; the recording (if any) is finished")
         with self._cond:
             self._published = run.next_output - 1
+            self._fluid_t = t
             self._cond.notify_all()
         if run.done:
             self.stop_recording("completed")
@@ -198,6 +220,33 @@ class Session:
                 self._cond.wait(due - time.monotonic())
 
     # -- requests from ROS callbacks -----------------------------------------------------------
+    def clock_to(self, t: float) -> bool:
+        """The followed clock reads ``t`` [s]: the fluid may advance to it. False, and nothing
+        changed, where it went back (a simulator's reset): the caller resets the run."""
+        with self._cond:
+            if self._limit is not None and t < self._limit - 1e-9:
+                return False
+            self._limit = t
+            lag = t - self._fluid_t
+            self._lag_worst = max(self._lag_worst, lag)
+            if lag > self.max_lag and self.run is not None and not self.run.done:
+                if self._lag_warned:
+                    self._lag_over += 1
+                else:
+                    self._lag_warned = True
+                    warn = (f"the fluid is {lag:.3f} s behind the followed /clock (max_lag {self.max_lag:g} s); "
+                            "/diagnostics counts each clock message after this with it further behind")
+                    threading.Thread(target=self._report, args=("warn", warn), daemon=True).start()
+            self._cond.notify_all()
+        return True
+
+    def restart_clock(self, t: float):
+        """Follow the clock afresh from ``t`` (after the reset its going back asked for)."""
+        with self._cond:
+            self._limit, self._fluid_t, self._lag_worst = t, 0.0, 0.0
+            self._lag_over, self._lag_warned = 0, False
+            self._cond.notify_all()
+
     def change(self, **changes):
         """Live changes (node_params.LIVE_SETTINGS), applied by the solver thread before its next step."""
         with self._cond:
@@ -282,6 +331,7 @@ class Session:
             self.stop_recording("reset")
             with self._cond:
                 self.run, self.failure, self._step_to, self._published, self._pending = run, "", -1, -1, {}
+                self._fluid_t = run.solver.time
                 self._generation += 1
                 self._pace = self._window = None
             return run

@@ -127,11 +127,12 @@ class SimNode(LifecycleNode):
             self.declare_parameter(p.name, p.default, _descriptor(p))
         self.namespace = self.get_fully_qualified_name()
         self._fixed_pubs = {
-            "/clock": self.create_publisher(Clock, "/clock", _qos(**CLOCK_QOS)),
             f"{self.namespace}/particles": self.create_publisher(
                 PointCloud2, "~/particles", _qos(**PARTICLES_QOS),
                 qos_overriding_options=QoSOverridingOptions.with_default_policies()),
         }
+        if self.value("clock") == "publish":  # follow: another node's; off: none
+            self._fixed_pubs["/clock"] = self.create_publisher(Clock, "/clock", _qos(**CLOCK_QOS))
         self._topic_pubs = dict(self._fixed_pubs)
         self._diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         self.awaiting_reset = set()  # parameters changed since the last build that need one
@@ -156,6 +157,11 @@ class SimNode(LifecycleNode):
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
         self.session = Session(self._publish, self._report)
+        self.session.max_lag = self.value("max_lag")
+        if self.value("clock") == "follow":
+            # on the commands' node: its one thread takes each tick in turn, off the services' threads
+            self.session.following = True
+            self._commands_node.create_subscription(Clock, "/clock", self._clock_tick, _qos(**CLOCK_QOS))
         # services run side by side (a waiting ~/step blocks no ~/set_paused) and apart from the
         # parameter services; the session serialises what must be serialised
         services = ReentrantCallbackGroup()
@@ -382,7 +388,8 @@ class SimNode(LifecycleNode):
         """One publisher per topic of the scene's outputs (found from the outputs at t = 0);
         those of the previous scene that this one lacks are removed."""
         latched = run.latched_messages()
-        wanted = {topic: (type(msg), 10) for topic, msg in run.output_messages(0)}
+        wanted = {topic: (type(msg), 10) for topic, msg in run.output_messages(0)
+                  if topic != "/clock"}  # /clock's is fixed (clock: publish) or none (follow, none)
         wanted |= {topic: (type(msg), _qos(**LATCHED_QOS)) for topic, msg in latched}
         for topic in list(self._topic_pubs):
             if topic not in self._fixed_pubs and topic not in wanted:
@@ -580,9 +587,24 @@ class SimNode(LifecycleNode):
     def _report(self, level, text):
         if level == "error":
             self.get_logger().error(text)
+        elif level == "warn":
+            self.get_logger().warning(text)
         else:
             self.get_logger().info(text)
         self._publish_diagnostics()
+
+    @_quiet
+    def _clock_tick(self, msg):
+        """clock: follow: the fluid may advance to the followed clock's time; a clock that goes back
+        (a simulator's reset) resets the run, which then follows the clock from there."""
+        t = msg.clock.sec + msg.clock.nanosec * 1e-9
+        if self.session.clock_to(t):
+            return
+        self.get_logger().warning(f"the followed /clock went back to t = {t:.4f} s: resetting the run")
+        answer = self._reset(Trigger.Request(), Trigger.Response())
+        if not answer.success:
+            self.get_logger().error(f"the reset the clock asked for failed: {answer.message}")
+        self.session.restart_clock(t)
 
     @_quiet
     def _tick(self):
@@ -604,6 +626,9 @@ class SimNode(LifecycleNode):
         if stats.get("left_tank_particles"):  # physics, not a fault: said, not warned of
             message += (f"; {stats['left_tank_particles']} fluid particles left the tank over its walls "
                         f"({stats['left_tank_fraction']:.3%} of the fluid mass)")
+        if "clock_lag" in stats:
+            message += (f"; following /clock (t = {stats['clock_followed']:.3f} s): the fluid "
+                        f"{stats['clock_lag']:.3f} s behind, at worst {stats['clock_lag_worst']:.3f} s")
         if self.internal_error:
             level, message = DiagnosticStatus.ERROR, f"{message}; {self.internal_error}"
             stats["internal_error"] = self.internal_error

@@ -1,0 +1,166 @@
+"""sim_node with ``clock: follow`` (issue 57): the fluid follows another publisher's /clock, a stand-in
+for a robot simulator's, at 1 kHz of simulated time, in a process of its own on a DDS domain of its own.
+
+- At a real-time factor the fluid keeps up with (0.02), every output is stamped with a time the
+  followed clock had reached when it arrived, and the fluid is never more than one output interval
+  and one tick behind (/diagnostics: ``clock_lag_worst``).
+- A clock that goes back (a simulator's reset) resets the run, which follows the clock from there
+  (tried first, past the first steps, which load the kernels).
+- At a factor it cannot keep up with (the clock 1 s ahead every 10 ms), /diagnostics shows the lag
+  growing and the node warns once.
+- Nothing but the stand-in publishes /clock; with ``clock: none`` nothing does, and the run runs.
+"""
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+from diagnostic_msgs.msg import DiagnosticArray
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import PointCloud2
+
+from ros_client import Client
+
+pytestmark = pytest.mark.ros
+
+BIN = Path(sys.executable).parent
+DOMAIN = 205 + os.getpid() % 20  # apart from test_sim_node's (101-200) and test_node_abuse's (20-79)
+RATE = 100.0  # [Hz] the node's outputs
+TICK = 0.001  # [s] of simulated time between the stand-in's clock messages: 1 kHz
+
+
+def _stamp(t: float):
+    msg = Clock()
+    msg.clock.sec = int(t)
+    msg.clock.nanosec = int(round((t - int(t)) * 1e9))
+    return msg
+
+
+def _t(stamp) -> float:
+    return stamp.sec + stamp.nanosec * 1e-9
+
+
+def _diagnostic(client, after: float) -> dict:
+    """The values of the first solver diagnostic that arrives after the monotonic time ``after``."""
+    client.wait_for("/diagnostics", lambda _: client.arrivals["/diagnostics"][-1:] > [after], timeout=30.0)
+    msgs = client.received("/diagnostics")
+    return {kv.key: kv.value for kv in msgs[-1].status[0].values}
+
+
+class StandIn:
+    """A clock publisher on the client's node: ``run(t0, t1, factor)`` publishes t0, t0 + TICK, ...
+    up to t1 at ``factor`` simulated seconds per wall second; ``published`` is the last time sent."""
+
+    def __init__(self, client):
+        self.pub = client.node.create_publisher(Clock, "/clock", 10)
+        self.published = -1.0
+
+    def run(self, t0: float, t1: float, factor: float, step: float = TICK):
+        start, k = time.monotonic(), 0
+        while t0 + k * step <= t1 + 1e-12:
+            t = t0 + k * step
+            due = start + (t - t0) / factor
+            if due > time.monotonic():
+                time.sleep(due - time.monotonic())
+            self.published = t
+            self.pub.publish(_stamp(t))
+            k += 1
+
+
+@pytest.fixture(scope="module")
+def followed(tmp_path_factory):
+    log = tmp_path_factory.mktemp("clock") / "sim_node.log"
+    env = {**os.environ, "ROS_DOMAIN_ID": str(DOMAIN), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
+           "PYTHONUNBUFFERED": "1"}
+    proc = subprocess.Popen([str(BIN / "sim_node"), "--ros-args", "-p", "scene:=collapse_2d", "-p", "dx:=0.01",
+                             "-p", "clock:=follow", "-p", "end_time:=1000.0", "-p", f"output_rate:={RATE}",
+                             "-p", "max_lag:=0.05"], env=env, stdout=open(log, "w"), stderr=subprocess.STDOUT)
+    client = Client(DOMAIN)
+    client.subscribe("/clock", Clock, depth=1000)
+    client.subscribe("/diagnostics", DiagnosticArray)
+    client.subscribe("/sim_node/particles", PointCloud2, depth=1000)
+    stand_in = StandIn(client)
+    try:
+        client.wait_for("/diagnostics", lambda m: bool(m) and "running" in m[-1].status[0].message, timeout=300.0)
+        yield client, stand_in, proc, log
+    finally:
+        client.close()
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(timeout=60)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+
+
+def test_a_node_that_follows_a_clock_keeps_up_resets_when_it_goes_back_and_warns_when_behind(followed):
+    client, stand_in, proc, log = followed
+    # nothing moves before the followed clock does
+    time.sleep(1.0)
+    assert float(_diagnostic(client, time.monotonic())["simulated_time"]) == 0.0
+    # 1. the first 0.1 s (the kernels load on the first steps), then the clock goes back, as a
+    # simulator's reset: the run starts again and follows from there
+    stand_in.run(0.0, 0.1, 0.05)
+    stand_in.run(0.0, 0.05, 0.05)
+    time.sleep(1.0)
+    assert "went back to t = 0.0000 s: resetting the run" in log.read_text()
+    assert float(_diagnostic(client, time.monotonic())["simulated_time"]) == pytest.approx(0.05, abs=1e-9)
+    # 2. keeping up: to 0.3 s at a real-time factor of 0.02, a tick each 50 ms of wall time
+    seen = []
+    lock = threading.Lock()
+
+    def arrived(msg):
+        with lock:
+            seen.append((_t(msg.header.stamp), stand_in.published))
+    client.node.create_subscription(PointCloud2, "/sim_node/particles", arrived, 1000)
+    stand_in.run(0.051, 0.3, 0.02)
+    time.sleep(1.0)
+    with lock:
+        outputs = list(seen)
+    assert len(outputs) == 25  # 0.06 ... 0.3
+    assert all(stamp <= clock + 1e-9 for stamp, clock in outputs)  # never past the followed clock
+    assert outputs[-1][0] == pytest.approx(0.3, abs=1e-9)
+    # the clock when each output arrived less the fluid's time before it: the most it was behind
+    assert max(clock - before for (before, _), (_, clock) in zip(outputs, outputs[1:])) <= 1.0 / RATE + TICK + 1e-9
+    values = _diagnostic(client, time.monotonic())
+    # since the reset, its first outputs included (a new run's first steps are slower)
+    assert float(values["clock_lag_worst"]) < 2.0 / RATE
+    assert float(values["clock_lag"]) < 1e-9 and float(values["clock_followed"]) == pytest.approx(0.3)
+    # nothing but the stand-in publishes /clock
+    assert [p.node_name for p in client.node.get_publishers_info_by_topic("/clock")] == ["test_client"]
+    # 3. a clock the fluid cannot keep up with: 1 s ahead every 10 ms (100 s a second)
+    behind = []
+    runner = threading.Thread(target=stand_in.run, args=(1.0, 400.0, 100.0, 1.0))
+    runner.start()
+    for _ in range(3):
+        behind.append(float(_diagnostic(client, time.monotonic())["clock_lag"]))
+    runner.join()
+    assert behind[0] < behind[1] < behind[2]
+    assert log.read_text().count("behind the followed /clock (max_lag 0.05 s)") == 1
+    assert int(_diagnostic(client, time.monotonic())["clock_lag_over"]) > 0
+
+
+def test_a_node_without_a_clock_runs_and_publishes_none(tmp_path):
+    domain = 225 + os.getpid() % 8
+    env = {**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+    log = tmp_path / "sim_node.log"
+    proc = subprocess.Popen([str(BIN / "sim_node"), "--ros-args", "-p", "scene:=collapse_2d", "-p", "dx:=0.01",
+                             "-p", "clock:=none", "-p", "end_time:=0.2"], env=env, stdout=open(log, "w"),
+                            stderr=subprocess.STDOUT)
+    client = Client(domain)
+    client.subscribe("/clock", Clock)
+    client.subscribe("/diagnostics", DiagnosticArray)
+    try:
+        client.wait_for("/diagnostics", lambda m: bool(m) and m[-1].status[0].message.startswith("finished"),
+                        timeout=120.0)
+        assert client.received("/clock") == [] and client.node.get_publishers_info_by_topic("/clock") == []
+    finally:
+        client.close()
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(timeout=60)
+        except subprocess.TimeoutExpired:
+            proc.kill()
