@@ -1,7 +1,7 @@
 """sim_node with ``clock: follow`` (issue 57): the fluid follows another publisher's /clock, a stand-in
 for a robot simulator's, at 1 kHz of simulated time, in a process of its own on a DDS domain of its own.
 
-- At a real-time factor the fluid keeps up with (0.02), every output is stamped with a time the
+- At a real-time factor the fluid keeps up with (0.01), every output is stamped with a time the
   followed clock had reached when it arrived, and the fluid is never more than one output interval
   and one tick behind (/diagnostics: ``clock_lag_worst``).
 - A clock that goes back (a simulator's reset) resets the run, which follows the clock from there
@@ -108,7 +108,8 @@ def test_a_node_that_follows_a_clock_keeps_up_resets_when_it_goes_back_and_warns
     time.sleep(1.0)
     assert "went back to t = 0.0000 s: resetting the run" in log.read_text()
     assert float(_diagnostic(client, time.monotonic())["simulated_time"]) == pytest.approx(0.05, abs=1e-9)
-    # 2. keeping up: to 0.3 s at a real-time factor of 0.02, a tick each 50 ms of wall time
+    # 2. keeping up: to 0.2 s at a real-time factor of 0.01, a tick each 100 ms of wall time (a loaded
+    # 2-core machine steps an output of this scene in about 10-30 ms)
     seen = []
     lock = threading.Lock()
 
@@ -116,19 +117,19 @@ def test_a_node_that_follows_a_clock_keeps_up_resets_when_it_goes_back_and_warns
         with lock:
             seen.append((_t(msg.header.stamp), stand_in.published))
     client.node.create_subscription(PointCloud2, "/sim_node/particles", arrived, 1000)
-    stand_in.run(0.051, 0.3, 0.02)
+    stand_in.run(0.051, 0.2, 0.01)
     time.sleep(1.0)
     with lock:
         outputs = list(seen)
-    assert len(outputs) == 25  # 0.06 ... 0.3
+    assert len(outputs) == 15  # 0.06 ... 0.2
     assert all(stamp <= clock + 1e-9 for stamp, clock in outputs)  # never past the followed clock
-    assert outputs[-1][0] == pytest.approx(0.3, abs=1e-9)
+    assert outputs[-1][0] == pytest.approx(0.2, abs=1e-9)
     # the clock when each output arrived less the fluid's time before it: the most it was behind
     assert max(clock - before for (before, _), (_, clock) in zip(outputs, outputs[1:])) <= 1.0 / RATE + TICK + 1e-9
     values = _diagnostic(client, time.monotonic())
     # since the reset, its first outputs included (a new run's first steps are slower)
     assert float(values["clock_lag_worst"]) < 2.0 / RATE
-    assert float(values["clock_lag"]) < 1e-9 and float(values["clock_followed"]) == pytest.approx(0.3)
+    assert float(values["clock_lag"]) < 1e-9 and float(values["clock_followed"]) == pytest.approx(0.2)
     # nothing but the stand-in publishes /clock
     assert [p.node_name for p in client.node.get_publishers_info_by_topic("/clock")] == ["test_client"]
     # 3. a clock the fluid cannot keep up with: 1 s ahead every 10 ms (100 s a second)
