@@ -18,7 +18,11 @@ the latencies' median, 99th percentile and worst per kind, calls unanswered with
 under --out. Exit status 0 when RSS grows under 1 MB a minute after 5 minutes, every call answers
 within 2 s and every bag reads whole, else 1.
 
-    python bench/soak.py [--minutes 30] [--out docs/results/soak] [--seed 1]
+``--clock follow`` starts the node with ``clock: follow`` and publishes its /clock from the soak, in
+real time at 200 Hz (a robot simulator's bridge), going back to 0 now and then (a simulator's reset)
+as one more kind of call.
+
+    python bench/soak.py [--minutes 30] [--out docs/results/soak] [--seed 1] [--clock follow]
 """
 import argparse
 import csv
@@ -31,6 +35,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -92,10 +97,11 @@ def _check_closed_bags(folder: Path, keep_open: bool) -> list:
     return out
 
 
-def soak(minutes: float, out: Path, seed: int, period: float, sample: float) -> int:
+def soak(minutes: float, out: Path, seed: int, period: float, sample: float, clock: str = "publish") -> int:
     from geometry_msgs.msg import PoseStamped, TwistStamped, WrenchStamped
     from lifecycle_msgs.msg import Transition
     from lifecycle_msgs.srv import ChangeState
+    from rosgraph_msgs.msg import Clock
     from std_srvs.srv import SetBool, Trigger
 
     from ros_client import Client
@@ -115,7 +121,7 @@ def soak(minutes: float, out: Path, seed: int, period: float, sample: float) -> 
     log = open(work / "node.log", "w")
     node = subprocess.Popen([sys.executable, "-m", "gpusph_ros.ros.sim_node", "--ros-args", "-p", f"scene:={scene}",
                              "-p", "dx:=0.03", "-p", "end_time:=100000.0", "-p", "real_time_factor:=1.0",
-                             "-p", f"record_dir:={bags}", "-p", f"state_file:={saved}"],
+                             "-p", f"record_dir:={bags}", "-p", f"state_file:={saved}", "-p", f"clock:={clock}"],
                             env=env, stdout=log, stderr=subprocess.STDOUT)
     client = Client(domain)
     calls, samples, read = [], [], []
@@ -145,6 +151,21 @@ def soak(minutes: float, out: Path, seed: int, period: float, sample: float) -> 
         kind = rng.choice(["pose", "twist", "wrench"])
         for _ in range(BURST if rng.random() < 0.2 else 1):
             command(kind, rng.choice([None, None, "nan", "huge", "frame", "future", "turn"]))
+
+    ticking = {"origin": time.monotonic(), "run": clock == "follow"}
+    clock_pub = client.node.create_publisher(Clock, "/clock", 10)
+
+    def tick():
+        """The followed clock: real time since its origin, 200 times a second."""
+        while ticking["run"]:
+            t = time.monotonic() - ticking["origin"]
+            msg = Clock()
+            msg.clock.sec, msg.clock.nanosec = int(t), int((t - int(t)) * 1e9)
+            clock_pub.publish(msg)
+            time.sleep(0.005)
+
+    def clock_back():
+        ticking["origin"] = time.monotonic()
 
     def lifecycle(label):
         ids = {"deactivate": Transition.TRANSITION_DEACTIVATE, "activate": Transition.TRANSITION_ACTIVATE}
@@ -178,6 +199,9 @@ def soak(minutes: float, out: Path, seed: int, period: float, sample: float) -> 
         "lifecycle": lambda: lifecycle(rng.choice(["deactivate", "activate"])),
         "body commands": commands,
     }
+    if clock == "follow":
+        kinds["clock back to 0"] = clock_back
+        threading.Thread(target=tick, daemon=True).start()
     try:
         deadline = time.monotonic() + 300
         while node.poll() is None and time.monotonic() < deadline:  # up and stepping
@@ -216,6 +240,7 @@ def soak(minutes: float, out: Path, seed: int, period: float, sample: float) -> 
         if alive:
             client.call("record", SetBool, timeout=10.0, data=False)
     finally:
+        ticking["run"] = False
         client.close()
         if node.poll() is None:
             node.send_signal(signal.SIGINT)
@@ -225,10 +250,10 @@ def soak(minutes: float, out: Path, seed: int, period: float, sample: float) -> 
                 node.kill()
         log.close()
     read += _check_closed_bags(bags, keep_open=False)
-    return _report(out, minutes, samples, calls, read, alive, marker.exists(), work)
+    return _report(out, minutes, samples, calls, read, alive, marker.exists(), work, clock)
 
 
-def _report(out: Path, minutes, samples, calls, read, alive, ran, work) -> int:
+def _report(out: Path, minutes, samples, calls, read, alive, ran, work, clock) -> int:
     out.mkdir(parents=True, exist_ok=True)
     for name, rows in (("soak.csv", samples), ("soak_calls.csv", calls)):
         with open(out / name, "w", newline="") as f:
@@ -245,10 +270,10 @@ def _report(out: Path, minutes, samples, calls, read, alive, ran, work) -> int:
     slow = [c for c in calls if c["latency_s"] > ANSWER]
     broken = [b for b in read if not b[2]]
     lines = [f"# sim_node soak: {minutes:g} minutes", "",
-             "`python bench/soak.py --minutes %g` (a 2D tank with a driven paddle and a floating box at 3 cm, "
-             "real_time_factor 1, recording on and off at random; one client, a call about every 0.5 s, body "
+             "`python bench/soak.py --minutes %g --clock %s` (a 2D tank with a driven paddle and a floating box at "
+             "3 cm, real_time_factor 1, recording on and off at random; one client, a call about every 0.5 s, body "
              "commands among them, good and hostile, alone or %d at once). The node's log: %s."
-             % (minutes, BURST, work / "node.log"),
+             % (minutes, clock, BURST, work / "node.log"),
              "", f"- node alive at the end: {alive}; the pickle's command ran: {ran}",
              f"- calls: {len(calls)}; unanswered within {ANSWER:g} s: {len(unanswered)}; slower than {ANSWER:g} s: "
              f"{len(slow)}",
@@ -277,8 +302,10 @@ def main():
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--period", type=float, default=0.5, help="mean seconds between two calls")
     parser.add_argument("--sample", type=float, default=10.0, help="seconds between two samples of the node")
+    parser.add_argument("--clock", choices=["publish", "follow"], default="publish",
+                        help="follow: the node follows a /clock the soak publishes in real time")
     args = parser.parse_args()
-    sys.exit(soak(args.minutes, args.out, args.seed, args.period, args.sample))
+    sys.exit(soak(args.minutes, args.out, args.seed, args.period, args.sample, args.clock))
 
 
 if __name__ == "__main__":

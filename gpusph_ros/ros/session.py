@@ -83,8 +83,8 @@ class Session:
         run = self.run
         if run is None or self.failure or run.done or self._hold:
             return False
-        if self.following and not self._stepping():
-            # the next output only once the followed clock has reached it
+        if self.following:
+            # the next output only once the followed clock has reached it (a ~/step's too)
             limit = self._limit
             if limit is None or run.next_output / run.output.output_rate > limit + 1e-9:
                 return False
