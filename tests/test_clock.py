@@ -10,6 +10,7 @@ for a robot simulator's, at 1 kHz of simulated time, in a process of its own on 
   growing and the node warns once.
 - Nothing but the stand-in publishes /clock; with ``clock: none`` nothing does, and the run runs.
 """
+import contextlib
 import os
 import signal
 import subprocess
@@ -71,22 +72,21 @@ class StandIn:
             k += 1
 
 
-@pytest.fixture(scope="module")
-def followed(tmp_path_factory):
-    log = tmp_path_factory.mktemp("clock") / "sim_node.log"
-    env = {**os.environ, "ROS_DOMAIN_ID": str(DOMAIN), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
+@contextlib.contextmanager
+def _node(domain: int, log: Path, *params):
+    """sim_node on the 2D collapse at 1 cm with ``params`` (``name:=value``) on ``domain``, and a client
+    of it that keeps /clock and /diagnostics; both stopped after."""
+    env = {**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
            "PYTHONUNBUFFERED": "1"}
-    proc = subprocess.Popen([str(BIN / "sim_node"), "--ros-args", "-p", "scene:=collapse_2d", "-p", "dx:=0.01",
-                             "-p", "clock:=follow", "-p", "end_time:=1000.0", "-p", f"output_rate:={RATE}",
-                             "-p", "max_lag:=0.05"], env=env, stdout=open(log, "w"), stderr=subprocess.STDOUT)
-    client = Client(DOMAIN)
+    args = [str(BIN / "sim_node"), "--ros-args", "-p", "scene:=collapse_2d", "-p", "dx:=0.01"]
+    for p in params:
+        args += ["-p", p]
+    proc = subprocess.Popen(args, env=env, stdout=open(log, "w"), stderr=subprocess.STDOUT)
+    client = Client(domain)
     client.subscribe("/clock", Clock, depth=1000)
     client.subscribe("/diagnostics", DiagnosticArray)
-    client.subscribe("/sim_node/particles", PointCloud2, depth=1000)
-    stand_in = StandIn(client)
     try:
-        client.wait_for("/diagnostics", lambda m: bool(m) and "running" in m[-1].status[0].message, timeout=300.0)
-        yield client, stand_in, proc, log
+        yield proc, client
     finally:
         client.close()
         proc.send_signal(signal.SIGINT)
@@ -94,6 +94,17 @@ def followed(tmp_path_factory):
             proc.wait(timeout=60)
         except subprocess.TimeoutExpired:
             proc.kill()
+
+
+@pytest.fixture(scope="module")
+def followed(tmp_path_factory):
+    log = tmp_path_factory.mktemp("clock") / "sim_node.log"
+    with _node(DOMAIN, log, "clock:=follow", "end_time:=1000.0", f"output_rate:={RATE}", "max_lag:=0.05") as (
+            proc, client):
+        client.subscribe("/sim_node/particles", PointCloud2, depth=1000)
+        stand_in = StandIn(client)
+        client.wait_for("/diagnostics", lambda m: bool(m) and "running" in m[-1].status[0].message, timeout=300.0)
+        yield client, stand_in, proc, log
 
 
 def test_a_node_that_follows_a_clock_keeps_up_resets_when_it_goes_back_and_warns_when_behind(followed):
@@ -145,23 +156,7 @@ def test_a_node_that_follows_a_clock_keeps_up_resets_when_it_goes_back_and_warns
 
 
 def test_a_node_without_a_clock_runs_and_publishes_none(tmp_path):
-    domain = 225 + os.getpid() % 8
-    env = {**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
-    log = tmp_path / "sim_node.log"
-    proc = subprocess.Popen([str(BIN / "sim_node"), "--ros-args", "-p", "scene:=collapse_2d", "-p", "dx:=0.01",
-                             "-p", "clock:=none", "-p", "end_time:=0.2"], env=env, stdout=open(log, "w"),
-                            stderr=subprocess.STDOUT)
-    client = Client(domain)
-    client.subscribe("/clock", Clock)
-    client.subscribe("/diagnostics", DiagnosticArray)
-    try:
+    with _node(225 + os.getpid() % 8, tmp_path / "sim_node.log", "clock:=none", "end_time:=0.2") as (_, client):
         client.wait_for("/diagnostics", lambda m: bool(m) and m[-1].status[0].message.startswith("finished"),
                         timeout=120.0)
         assert client.received("/clock") == [] and client.node.get_publishers_info_by_topic("/clock") == []
-    finally:
-        client.close()
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(timeout=60)
-        except subprocess.TimeoutExpired:
-            proc.kill()
