@@ -102,7 +102,9 @@ class Transducers:
         self._drop = wp.array(drop, dtype=solver.scalar, device=dev)
         self._first, self._last = i32(np.cumsum(counts) - counts), i32(np.cumsum(counts))
         self._clip = i32([bool(clip) for *_, clip, _ in sensors])
-        self._tau = wp.array(np.asarray([float(r) for *_, r in sensors]), dtype=wp.float64, device=dev)
+        tau = np.asarray([float(r) for *_, r in sensors])
+        self._lagged = tau > 0.0  # the sensors with a response
+        self._tau = wp.array(tau, dtype=wp.float64, device=dev)
         self._now, self._filtered, self._impulse, self._span = (wp.zeros(k, dtype=wp.float64, device=dev)
                                                                 for _ in range(4))
         self._primed = wp.zeros(k, dtype=wp.int32, device=dev)
@@ -133,7 +135,7 @@ class Transducers:
         self._read(self.solver.measurement_view(), False)
         # copies: on the CPU numpy() is a view of the device's memory, which zero_() clears
         now, span, impulse = (a.numpy().copy() for a in (self._now, self._span, self._impulse))
-        held = np.where((self._tau.numpy() > 0.0) & (self._primed.numpy() != 0), self._filtered.numpy(), now)
+        held = np.where(self._lagged & (self._primed.numpy() != 0), self._filtered.numpy(), now)
         self._impulse.zero_()
         self._span.zero_()
         out = {}

@@ -131,7 +131,7 @@ class SimNode(LifecycleNode):
                 PointCloud2, "~/particles", _qos(**PARTICLES_QOS),
                 qos_overriding_options=QoSOverridingOptions.with_default_policies()),
         }
-        if self.value("clock") == "publish":  # follow: another node's; off: none
+        if self.value("clock") == "publish":  # follow: another node's; none: no one's
             self._fixed_pubs["/clock"] = self.create_publisher(Clock, "/clock", _qos(**CLOCK_QOS))
         self._topic_pubs = dict(self._fixed_pubs)
         self._diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)

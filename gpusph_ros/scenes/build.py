@@ -106,7 +106,7 @@ def priced(scene: Scene, run_config) -> tuple:
     zones) under ``run_config``: what a run costs, from the scene alone, nothing built."""
     cfg = run_config.solver
     reduced = reduce.apply(scene, run_config.reduction, run_config.output.end_time, cfg.dx, cfg.hdx)
-    cfg = scene_config(reduced, cfg).replace(device=chosen_device(cfg.device))
+    cfg = scene_config(reduced, cfg)
     return reduced, cfg, resources.particle_bound(reduced, cfg, fluid_boxes(reduced))
 
 
@@ -116,8 +116,10 @@ def build(scene: Scene, **numerics) -> Model:
 
 
 def scene_config(scene: Scene, cfg: SolverConfig) -> SolverConfig:
-    """``cfg`` with what the scene decides: its dimension, gravity, depth and periodic axes."""
-    return cfg.replace(dim=scene.dim, gravity=scene.gravity, depth=scene.depth, periodic=scene.periodic).validate()
+    """``cfg`` with what the scene decides (its dimension, gravity, depth and periodic axes) and the
+    device this machine steps it on (``device: auto`` chosen here: sph.device.chosen_device)."""
+    return cfg.replace(dim=scene.dim, gravity=scene.gravity, depth=scene.depth, periodic=scene.periodic,
+                       device=chosen_device(cfg.device)).validate()
 
 
 def fluid_boxes(scene: Scene) -> list:
@@ -165,7 +167,6 @@ def build_from(scene: Scene, cfg: SolverConfig) -> Model:
     cfg = scene_config(scene, cfg)
     dx = cfg.dx
     boxes = fluid_boxes(scene)
-    cfg = cfg.replace(device=chosen_device(cfg.device))
     check_device(cfg.device)
     resources.check(scene, cfg, boxes)  # before anything is allocated
     cfg, parts = box_tank(cfg, scene.tank[:dim], boxes, walls=scene.walls, headroom=scene.headroom)

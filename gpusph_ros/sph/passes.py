@@ -375,12 +375,13 @@ def _time_passes(scalar):
         if not selected(p, hsml[i], levels):
             return
         dt = factor * scalar(clock[DT]) * scalar(stride(p, hsml[i]))
-        rho_out[i] = rho[i] + dt * drho[i]
+        r = rho[i] + dt * drho[i]
         if not carries_fluid(ptype[i]):
+            rho_out[i] = r
             pos_out[i] = pos[i]
             vel_out[i] = vel[i]
             return
-        rho_out[i] = cavitation_floor(rho_out[i], p.rho_floor)
+        rho_out[i] = cavitation_floor(r, p.rho_floor)
         x = pos[i] + dt * (vel_rate[i] + xsph[i])
         if p.shift_a_h != scalar(0.0):
             x += capped(dt * shift[i], p.shift_cap * own_scale(p, hsml[i]))
