@@ -23,7 +23,7 @@ setup(
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
-        *share_files('config', 'data', 'launch', 'rviz', 'foxglove'),
+        *share_files('config', 'data', 'launch', 'rviz', 'foxglove', 'examples'),
     ],
     # what pip installs beside the package: the PyPI-only dependencies and the Python ones that a ROS
     # install has from apt (package.xml names those, and the ROS packages, for rosdep); requirements.txt

@@ -77,6 +77,8 @@ class Run:
         # the stamps' origin: 0, or the wall clock now (Output.stamps), the same for the whole run
         self.time_origin_ns = time.time_ns() if self.output.stamps == "epoch" else 0
         self.next_output = 0
+        self.next_fast = 0  # the index of the next wrench-rate time (Output.wrench_rate), k / rate
+        self._fast_from_now()
         self.wall = 0.0
         self.torn = False  # a Ctrl-C landed inside a step: no checkpoint of this state
         # driven bodies (drive.py) by name: their body id and their driver
@@ -125,10 +127,12 @@ class Run:
     def set_output(self, **changes):
         """Change ``Output`` fields mid-run. A new output rate starts its grid at the next output
         time after the present one."""
-        rate = self.output.output_rate
+        rate, fast = self.output.output_rate, self.output.wrench_rate
         self.output = dataclasses.replace(self.output, **changes)
         if self.output.output_rate != rate and self.next_output > 0:
             self.next_output = outputs_by(self.solver.time, self.output.output_rate)
+        if self.output.wrench_rate != fast:
+            self._fast_from_now()
 
     def set_cloud(self, fields=None, frame_id=None):
         """Change the particle cloud's fields or the frame of every message."""
@@ -246,6 +250,7 @@ class Run:
         checkpoint.put(self.solver, state["solver"])
         self.measurements.restart()
         self.next_output, self.wall, self.time_origin_ns, self.output = next_output, wall, origin, output
+        self._fast_from_now()
 
     def open_recording(self, path, compression: str = None, earlier: list = None):
         """A BagRecorder at ``path`` with this run's topics declared and its latched messages written
@@ -288,11 +293,37 @@ class Run:
             out.append((self.particles_topic, self.cloud.build(t, self.packer.pack())))
         return self._restamped(out, t)
 
-    def step_output(self, interrupt=None):
-        """Advance to the next output time and return its messages (HealthError on failure);
-        None when ``interrupt`` stopped the solver short of it (``Solver.advance``)."""
+    def fast_messages(self, clock: bool = True) -> list:
+        """(topic, message) pairs at a wrench-rate time (``Output.wrench_rate``): each body's wrench,
+        the mean over the steps since the last, and a moving body's pose and odometry, on topics of
+        their own (``<name>/wrench_fast``, ...); /clock first where ``clock``."""
+        t = self.solver.time
+        out = [("/clock", messages.clock(t))] if clock else []
+        out += messages.body_messages(t, self.measurements.fast_sample(), self.model.config.dim, self.namespace,
+                                      self.frame_id, messages.FAST)
+        return self._restamped(out, t)
+
+    def next_event(self) -> float:
+        """The next time the run stops at [s]: its next output, or its next wrench-rate time."""
+        t = self.next_output / self.output.output_rate
+        rate = self.output.wrench_rate
+        return min(t, self.next_fast / rate) if rate else t
+
+    def _fast_from_now(self):
+        """The wrench-rate times counted on from the present (a new rate, a restored state): the
+        first is the first after now, so each message averages a whole interval."""
+        if self.output.wrench_rate:
+            self.measurements.start_fast()
+            self.next_fast = outputs_by(self.solver.time, self.output.wrench_rate)
+
+    def step_output(self, interrupt=None, limit: float = None):
+        """Advance to the next output, the next wrench-rate time or ``limit`` (a lockstep master's
+        target [s]), whichever is first, and return the messages due there, [] at a limit where none
+        are (HealthError on failure); None when ``interrupt`` stopped the solver short of it
+        (``Solver.advance``). Every time it stops at is a step's end: a run with other stops takes
+        other steps."""
         k = self.next_output
-        target = k / self.output.output_rate
+        target = self.next_event() if limit is None else min(self.next_event(), limit)
         start = time.perf_counter()
         for name, (body, hold) in self.wrenches.items():  # the floating bodies' external wrenches to this output
             wrench = hold.wrench(self.solver.time)
@@ -306,10 +337,16 @@ class Run:
                                                          poses[body]))
         try:
             self.solver.advance(target, interrupt)
-            msgs = None
-            if self.solver.reached(target):
+            if not self.solver.reached(target):
+                return None
+            rate, reached = self.output.wrench_rate, self.solver.reached
+            msgs = []
+            if reached(k / self.output.output_rate):
                 msgs = self.output_messages(k)
                 self.next_output += 1
+            if rate and reached(self.next_fast / rate):
+                msgs += self.fast_messages(clock=not msgs)
+                self.next_fast += 1
         finally:  # a failed output's steps count in the wall time too (MIPPS of a failed run)
             self.wall += time.perf_counter() - start
         return msgs
@@ -330,6 +367,7 @@ class Run:
         status = "completed"
         try:
             while not self.done:
+                k = self.next_output
                 msgs = self.step_output(stop)
                 if msgs is None:
                     status = "interrupted"
@@ -337,6 +375,8 @@ class Run:
                 for topic, msg in msgs:
                     if recorder is not None:
                         recorder.write(topic, msg, self.solver.time)
+                if self.next_output == k:  # a wrench-rate time between two outputs
+                    continue
                 if checkpoints is not None:
                     checkpoints(self)
                 if progress is not None:

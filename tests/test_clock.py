@@ -9,6 +9,11 @@ for a robot simulator's, at 1 kHz of simulated time, in a process of its own on 
 - At a factor it cannot keep up with (the clock 1 s ahead every 10 ms), /diagnostics shows the lag
   growing and the node warns once.
 - Nothing but the stand-in publishes /clock; with ``clock: none`` nothing does, and the run runs.
+- ``clock: lockstep``: the example stand-in robot loop (examples/lockstep_loop.py) advances
+  ``paddle_2d`` at 4 cm 1 ms at a time for 0.5 s; each target is answered once, in order, with
+  itself, and the paddle's wrench at each (``wrench_rate: 1000``) equals a free run's with the same
+  stops (a headless run of the same settings) to round-off. A target the fluid has passed is
+  answered at once with its time, ~/step is refused, and nothing is published on /clock.
 """
 import contextlib
 import os
@@ -19,16 +24,23 @@ import threading
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import PointCloud2
+from std_msgs.msg import Header
+from std_srvs.srv import Trigger
+
+from gpusph_ros.ros import node_params
+from gpusph_ros.runner import Run
 
 from ros_client import Client
 
 pytestmark = pytest.mark.ros
 
 BIN = Path(sys.executable).parent
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "lockstep_loop.py"
 DOMAIN = 205 + os.getpid() % 20  # apart from test_sim_node's (101-200) and test_node_abuse's (20-79)
 RATE = 100.0  # [Hz] the node's outputs
 TICK = 0.001  # [s] of simulated time between the stand-in's clock messages: 1 kHz
@@ -72,13 +84,17 @@ class StandIn:
             k += 1
 
 
+def _env(domain: int) -> dict:
+    return {**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
+            "PYTHONUNBUFFERED": "1"}
+
+
 @contextlib.contextmanager
-def _node(domain: int, log: Path, *params):
-    """sim_node on the 2D collapse at 1 cm with ``params`` (``name:=value``) on ``domain``, and a client
-    of it that keeps /clock and /diagnostics; both stopped after."""
-    env = {**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
-           "PYTHONUNBUFFERED": "1"}
-    args = [str(BIN / "sim_node"), "--ros-args", "-p", "scene:=collapse_2d", "-p", "dx:=0.01"]
+def _node(domain: int, log: Path, *params, scene="collapse_2d", dx=0.01):
+    """sim_node on ``scene`` (the 2D collapse) at ``dx`` (1 cm) with ``params`` (``name:=value``) on
+    ``domain``, and a client of it that keeps /clock and /diagnostics; both stopped after."""
+    env = _env(domain)
+    args = [str(BIN / "sim_node"), "--ros-args", "-p", f"scene:={scene}", "-p", f"dx:={dx}"]
     for p in params:
         args += ["-p", p]
     proc = subprocess.Popen(args, env=env, stdout=open(log, "w"), stderr=subprocess.STDOUT)
@@ -160,3 +176,38 @@ def test_a_node_without_a_clock_runs_and_publishes_none(tmp_path):
         client.wait_for("/diagnostics", lambda m: bool(m) and m[-1].status[0].message.startswith("finished"),
                         timeout=120.0)
         assert client.received("/clock") == [] and client.node.get_publishers_info_by_topic("/clock") == []
+
+
+def test_a_lockstep_master_steps_the_fluid_as_a_free_run_with_the_same_stops(tmp_path):
+    domain, rows = 80 + os.getpid() % 20, tmp_path / "loop.csv"  # apart from the other tests' domains
+    with _node(domain, tmp_path / "sim_node.log", "clock:=lockstep", "wrench_rate:=1000.0", "end_time:=1.0",
+               scene="paddle_2d", dx=0.04) as (_, client):
+        client.subscribe("/sim_node/reached", Header, depth=1000)
+        loop = subprocess.run([sys.executable, str(EXAMPLE), "--body", "paddle", "--step", "0.001", "--end", "0.5",
+                               "--timeout", "120", "--out", str(rows)], env=_env(domain), capture_output=True,
+                              text=True, timeout=600)
+        assert loop.returncode == 0, loop.stderr[-2000:]
+        answers = client.wait_for("/sim_node/reached", lambda m: len(m) >= 500, timeout=30.0)
+        # each target answered once, in order, with itself
+        assert [a.stamp.sec * 1_000_000_000 + a.stamp.nanosec for a in answers] == [
+            k * 1_000_000 for k in range(1, 501)]
+        # a target the fluid has passed: answered at once with where it is
+        client.node.create_publisher(Header, "/sim_node/advance_to", 10).publish(
+            Header(stamp=_stamp(0.2).clock))
+        late = client.wait_for("/sim_node/reached", lambda m: len(m) == 501, timeout=30.0)[-1]
+        assert _t(late.stamp) == pytest.approx(0.5, abs=1e-9)
+        answer = client.call("step", Trigger)
+        assert not answer.success and "lockstep" in answer.message
+        assert client.received("/clock") == [] and client.node.get_publishers_info_by_topic("/clock") == []
+    # the same settings run headless, stopping at the same times (each wrench_rate time ends a step)
+    values = {**node_params.DEFAULTS, "scene": "paddle_2d", "dx": 0.04, "clock": "lockstep", "wrench_rate": 1000.0,
+              "end_time": 0.5}
+    free = Run(*node_params.run_settings(values))
+    expected = []
+    while not free.done:
+        expected += [(free.solver.time, *(m.wrench.force.x, m.wrench.force.z, m.wrench.torque.y))
+                     for topic, m in free.step_output() if topic.endswith("paddle/wrench_fast")]
+    got = np.loadtxt(rows, delimiter=",", skiprows=1, usecols=(1, 3, 5, 7))
+    expected = np.asarray(expected)
+    assert got.shape == expected.shape == (500, 4)
+    assert np.allclose(got, expected, rtol=1e-6, atol=1e-6 * np.abs(expected[:, 1:]).max())

@@ -24,7 +24,7 @@ def test_the_issue_list_of_parameters_is_declared():
                      "device", "cfl", "c0", "end_time", "output_rate", "real_time_factor", "publish_particles",
                      "particle_fields", "record_dir", "frame_id", "autostart", "model", "crop", "wall_planes",
                      "max_excluded_fraction", "max_left_fraction", "mdbc_slip", "visco_bound_factor", "compression",
-                     "stamps", "state_file", "clock", "max_lag"}
+                     "stamps", "state_file", "clock", "max_lag", "wrench_rate"}
     for p in PARAMS:
         assert p.description and p.applies in (node_params.RESET, node_params.LIVE, node_params.RECORDING,
                                                node_params.STARTUP, node_params.SERVICE)
@@ -130,8 +130,13 @@ def test_a_scene_that_reset_would_refuse_is_refused_when_set(tmp_path):
 
 
 def test_the_clock_parameters_refuse_bad_values_naming_the_field():
-    assert check(_values(clock="follow")) is None and check(_values(clock="none")) is None
-    assert check(_values(clock="maybe"), ["clock"]).startswith("clock: 'maybe' is not one of publish, follow, none")
+    for clock in ("follow", "lockstep", "none"):
+        assert check(_values(clock=clock)) is None
+    assert check(_values(clock="maybe"), ["clock"]).startswith(
+        "clock: 'maybe' is not one of publish, follow, lockstep, none")
     assert check(_values(max_lag=-1.0), ["max_lag"]).startswith("max_lag: -1.0 is outside [0, 1000]")
-    # the followed clock's time is the simulated time: epoch stamps would be another clock
-    assert check(_values(clock="follow", stamps="epoch")).startswith("clock: follow takes the followed clock's time")
+    assert check(_values(wrench_rate=-1.0), ["wrench_rate"]).startswith("wrench_rate: -1.0 is outside [0, 10000]")
+    assert check(_values(wrench_rate=float("nan")), ["wrench_rate"]).startswith("wrench_rate: nan is outside")
+    # the master clock's time is the simulated time: epoch stamps would be another clock
+    for clock in ("follow", "lockstep"):
+        assert check(_values(clock=clock, stamps="epoch")).startswith(f"clock: {clock} takes the master clock's time")

@@ -73,7 +73,7 @@ class Measurements:
         # pressure (sensors.py)
         # a moving body's wrench is about where its reference point stands at the sample, in its own
         # axes, and its faces and blocks, fixed in space, are not measured
-        self._wrenches, self._blocks, self._faces, self._moving = {}, {}, {}, {}
+        self._wrenches, self._blocks, self._faces, self._moving, self._fast = {}, {}, {}, {}, {}
         for obstacle in scene.obstacles:
             centre = np.asarray(obstacle.centre(dim))
             self._wrenches[obstacle.name] = BodyWrench(solver, model.bodies[obstacle.name], centre)
@@ -98,8 +98,37 @@ class Measurements:
 
     def restart(self):
         """Forget what the measurements that average over steps have summed (a restored state)."""
-        for wrench in (*self._wrenches.values(), *self._transducers):
+        for wrench in (*self._wrenches.values(), *self._fast.values(), *self._transducers):
             wrench.restart()
+
+    def start_fast(self):
+        """Each body's wrench summed a second time, from now on, for the bodies' messages between
+        outputs (runner: wrench_rate): apart from the outputs' sums, so that each reports the mean
+        over its own interval. Once; the sums go on after, at one reduction per body and step."""
+        if not self._fast:
+            self._fast = {name: BodyWrench(self.solver, wrench.body_id, wrench.centre)
+                          for name, wrench in self._wrenches.items()}
+
+    def fast_sample(self) -> dict:
+        """{"wrenches", "poses"} as ``sample`` has them, the wrench the mean over the steps since the
+        last fast sample (``start_fast``)."""
+        return self._bodies(self._fast)
+
+    def _bodies(self, sums: dict) -> dict:
+        """{"wrenches": {name: (force, torque)} of ``sums`` (BodyWrench by name), "poses": {name:
+        a moving body's pose}}: a moving body's wrench turned into its own axes, about where its
+        reference point stands now."""
+        wrenches = {name: wrench.sample() for name, wrench in sums.items()}
+        out = {"wrenches": wrenches, "poses": {}}
+        if self._moving:
+            poses = self.solver.body_poses()
+            for name, (body, centre) in self._moving.items():
+                pose = out["poses"][name] = {**poses[body], "rotation": quaternion_matrix(poses[body]["quaternion"])}
+                force, torque = wrenches[name]
+                turn = pose["rotation"].T
+                about = torque - np.cross(pose["position"] - centre, force)
+                wrenches[name] = (turn @ force, turn @ about)
+        return out
 
     def sample(self) -> dict:
         """{"points": {name: {vel, pressure, rho}}, "profiles": {name: {heights, vel}},
@@ -135,16 +164,7 @@ class Measurements:
             values = self._columns.sample()
             for k, name in enumerate(self._column_names):
                 out["columns"][name] = {"vel": values["vel"][k], "count": int(values["count"][k])}
-        for name, wrench in self._wrenches.items():
-            out["wrenches"][name] = wrench.sample()
-        if self._moving:
-            poses = self.solver.body_poses()
-            for name, (body, centre) in self._moving.items():
-                pose = out["poses"][name] = {**poses[body], "rotation": quaternion_matrix(poses[body]["quaternion"])}
-                force, torque = out["wrenches"][name]
-                turn = pose["rotation"].T
-                about = torque - np.cross(pose["position"] - centre, force)
-                out["wrenches"][name] = (turn @ force, turn @ about)
+        out.update(self._bodies(self._wrenches))
         for name, blocks in self._blocks.items():
             out["blocks"][name] = blocks.sample()
         return out

@@ -165,16 +165,32 @@ def measurement_messages(t: float, sample: dict, scene, namespace: str = "/sim_n
         where = list(positions[name])
         where[up] = level
         out.append((f"{probes}/{name}", point(t, turned(where), frame_id)))
-    for kind, loads in (("wrench", sample["wrenches"]), ("pressure_load", sample.get("pressure_loads", {}))):
-        for name, (force, torque) in loads.items():
-            out.append((f"{namespace}/bodies/{name}/{kind}",
-                        wrench(t, turned(force), turned(torque), frames.body_frame(frame_id, name))))
-    for name, pose in sample.get("poses", {}).items():
-        stamped, odometry = body_motion(t, pose, scene.dim, frame_id, frames.body_frame(frame_id, name))
-        out.append((f"{namespace}/bodies/{name}/pose", stamped))
-        out.append((f"{namespace}/bodies/{name}/odom", odometry))
+    out += body_messages(t, sample, scene.dim, namespace, frame_id)
+    for name, (force, torque) in sample.get("pressure_loads", {}).items():
+        out.append((f"{namespace}/bodies/{name}/pressure_load",
+                    wrench(t, turned(force), turned(torque), frames.body_frame(frame_id, name))))
     for name, by_offset in sample["blocks"].items():
         for offset, (fx, _, _) in by_offset.items():
             out.append((f"{namespace}/bodies/{name}/pressure_blocks/{block_topic(offset)}",
                         wrench(t, (fx, 0.0, 0.0), (0.0, 0.0, 0.0), frames.body_frame(frame_id, name))))
+    return out
+
+
+FAST = "_fast"  # the suffix of the bodies' topics at wrench_rate (runner.Run.fast_messages)
+
+
+def body_messages(t: float, sample: dict, dim: int, namespace: str = "/sim_node", frame_id: str = "world",
+                  suffix: str = "") -> list:
+    """(topic, message) pairs of each body's wrench (``bodies/<name>/wrench<suffix>``, in its frame)
+    and a moving body's pose and odometry (``pose<suffix>``, ``odom<suffix>``: body_motion) from a
+    sample's "wrenches" and "poses" (``measure.suite.Measurements``)."""
+    out = []
+    for name, (force, torque) in sample["wrenches"].items():
+        out.append((f"{namespace}/bodies/{name}/wrench{suffix}",
+                    wrench(t, frames.published(dim, force), frames.published(dim, torque),
+                           frames.body_frame(frame_id, name))))
+    for name, pose in sample.get("poses", {}).items():
+        stamped, odometry = body_motion(t, pose, dim, frame_id, frames.body_frame(frame_id, name))
+        out.append((f"{namespace}/bodies/{name}/pose{suffix}", stamped))
+        out.append((f"{namespace}/bodies/{name}/odom{suffix}", odometry))
     return out

@@ -60,7 +60,7 @@ def _solver_params() -> tuple:
 
 # the parameter clock: what the node does with /clock; "none", not "off": ROS reads parameters as YAML
 # 1.1, where `clock:=off` is the boolean false
-CLOCKS = ("publish", "follow", "none")
+CLOCKS = ("publish", "follow", "lockstep", "none")
 SOLVER_PARAMS = _solver_params()
 PARAMS = (
     Param("scene", "dambreak1_thesis", "built-in scene name (" + ", ".join(builtin_names()) + ") or a path "
@@ -79,9 +79,15 @@ PARAMS = (
     Param("end_time", 0.0, "simulated time the run stops at [s]; 0 = the scene's own", LIVE, lo=0.0, hi=1.0e5),
     Param("output_rate", 0.0, "outputs per simulated second [Hz]: /clock, probes, wrenches and particles; "
           "0 = the scene's own", LIVE, lo=0.0, hi=1.0e4),
+    Param("wrench_rate", 0.0, "each body's wrench, pose and twist alone, without the cloud, this many times a "
+          "simulated second [Hz] on ~/bodies/<name>/wrench_fast, pose_fast and odom_fast (and /clock before them), "
+          "the wrench the mean over the steps since the last, for a controller's rate; each such time ends a step; "
+          "0 = with the outputs only", RESET, lo=0.0, hi=1.0e4),
     Param("clock", "publish", "the /clock topic: publish (the fluid's simulated time), follow (take /clock from "
           "another publisher, a robot simulator's, and advance the fluid to each time it receives, never past it; a "
-          "clock that goes back resets the run) or none (no clock: a recording-only run)", STARTUP, choices=CLOCKS),
+          "clock that goes back resets the run), lockstep (a master steps the fluid: it advances only to each time "
+          "sent on ~/advance_to, std_msgs/Header's stamp, lands on it and answers on ~/reached with its time; no "
+          "/clock) or none (no clock: a recording-only run)", STARTUP, choices=CLOCKS),
     Param("max_lag", 0.1, "under clock: follow, how far the fluid may fall behind the followed clock [s] before "
           "the node warns (once; /diagnostics counts each clock message after that with the fluid further behind)",
           LIVE, lo=0.0, hi=1.0e3),
@@ -164,9 +170,9 @@ def check(values: dict, changed=None):
         reason = _check_one(BY_NAME[name], values[name])
         if reason:
             return reason
-    if values["clock"] == "follow" and values["stamps"] != "simulated":
-        return ("clock: follow takes the followed clock's time as the simulated time; it needs stamps simulated, "
-                f"not {values['stamps']!r}")
+    if values["clock"] in ("follow", "lockstep") and values["stamps"] != "simulated":
+        return (f"clock: {values['clock']} takes the master clock's time as the simulated time; it needs stamps "
+                f"simulated, not {values['stamps']!r}")
     if values["sps"] and values["viscosity"] != "laminar":
         return (f"sps: true needs viscosity laminar (SPS adds the sub-particle-scale stress to laminar "
                 f"viscosity); viscosity is {values['viscosity']!r}")
@@ -199,7 +205,7 @@ def run_settings(values: dict):
     """(scene, RunConfig) of the parameter ``values``; ConfigError when they make no run."""
     scene = load_scene(values["scene"])
     output = {k: values[k] for k in ("end_time", "output_rate") if values[k] > 0.0}
-    output |= {k: values[k] for k in ("compression", "stamps")}
+    output |= {k: values[k] for k in ("compression", "stamps", "wrench_rate")}
     numerics = {p.name: values[p.name] for p in SOLVER_PARAMS}
     numerics["viscosity"] = "sps" if values["sps"] else values["viscosity"]
     reduction = {k: values[k] for k in ("model", "crop", "wall_planes")}

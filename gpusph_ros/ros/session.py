@@ -8,6 +8,7 @@ ROS callbacks run in other threads and only set flags and wait briefly: the solv
 in this thread, except a reset's build, which runs while this thread is held idle. Whatever a
 step raises ends the run as a failure the node reports; the thread never dies of it.
 """
+import collections
 import datetime
 import gc
 import threading
@@ -21,15 +22,17 @@ from ..sph import HealthError, NeighbourOverflow
 from .node_params import LIVE_SETTINGS
 
 NODE_STATE = "node state"  # the kind of state file ~/save_state writes (a gpusph-run checkpoint is another)
+MAX_TARGETS = 1000  # lockstep targets waiting at once; past them a request is refused (a flood of them)
 
 
 class Session:
     """``publish(topic, message, data)`` sends one output message (``data``: its CDR bytes);
-    ``report(level, text)`` tells the node of a failure or the end of the run. Both are called
-    from the solver thread."""
+    ``report(level, text)`` tells the node of a failure or the end of the run; under lockstep,
+    ``reached(target, t)`` answers a target with the fluid's time. All are called from the solver
+    thread."""
 
-    def __init__(self, publish, report):
-        self._publish, self._report = publish, report
+    def __init__(self, publish, report, reached=None):
+        self._publish, self._report, self._reached = publish, report, reached
         self._cond = threading.Condition()
         self._record_lock = threading.Lock()
         self.run = None
@@ -55,6 +58,10 @@ class Session:
         self._lag_over = 0  # clock messages with the fluid more than max_lag behind, after the warning
         self._lag_warned = False
         self._window = None
+        # clock: lockstep (sim_node): the times a master asked the fluid to reach, answered in order;
+        # the fluid steps only towards the first, and lands on it
+        self.lockstep = False
+        self._targets = collections.deque()
         self._thread = threading.Thread(target=self._loop, name="solver", daemon=True)
         self._thread.start()
 
@@ -86,9 +93,18 @@ class Session:
         if self.following:
             # the next output only once the followed clock has reached it (a ~/step's too)
             limit = self._limit
-            if limit is None or run.next_output / run.output.output_rate > limit + 1e-9:
+            if limit is None or run.next_event() > limit + 1e-9:
                 return False
+        if self.lockstep:
+            return bool(self._targets) and not run.solver.reached(self._targets[0]) and self.active and not self.paused
         return self._stepping() or (self.active and not self.paused)
+
+    def _answerable(self) -> bool:
+        """Whether the first lockstep target is due an answer: reached, or out of reach (the run
+        failed or is at its end)."""
+        run = self.run
+        return (bool(self._targets) and run is not None and not self._hold
+                and (self.failure != "" or run.done or run.solver.reached(self._targets[0])))
 
     def _interrupted(self) -> bool:
         return (self._closing or self._hold or bool(self._pending)
@@ -104,6 +120,8 @@ class Session:
             out.update(clock_followed=-1.0 if limit is None else limit,
                        clock_lag=0.0 if limit is None else max(limit - self._fluid_t, 0.0),
                        clock_lag_worst=self._lag_worst, clock_lag_over=self._lag_over)
+        if self.lockstep:
+            out.update(lockstep_waiting=len(self._targets))
         if run is None:
             return out
         solver, now = run.solver, time.perf_counter()
@@ -122,6 +140,7 @@ class Session:
     # -- the thread ----------------------------------------------------------------------------
     def _loop(self):
         while True:
+            answers = []
             with self._cond:
                 while True:
                     if self._closing:
@@ -132,12 +151,22 @@ class Session:
                         except Exception as err:  # a refused change ends the run, not the thread
                             self.failure = f"a live change failed: {type(err).__name__}: {err}"
                             self._report("error", self.failure)
-                    if self._can_advance():
+                    while self._answerable():
+                        answers.append((self._targets.popleft(), self.run.solver.time))
+                    if answers or self._can_advance():
                         break
                     self._cond.wait()
-                run, self._busy = self.run, True
+                if answers:  # sent outside the lock, then look again
+                    run = None
+                else:
+                    run, self._busy = self.run, True
+                    limit = self._targets[0] if self.lockstep else None
+            if run is None:
+                for target, t in answers:
+                    self._reached(target, t)
+                continue
             try:
-                self._advance(run)
+                self._advance(run, limit)
             finally:
                 with self._cond:
                     self._busy = False
@@ -167,9 +196,9 @@ class Session:
         if "frame_id" in changes:  # the geometry and the body frames, in the new frame
             self._emit(run.latched_messages(), run.solver.time)
 
-    def _advance(self, run):
+    def _advance(self, run, limit=None):
         try:
-            msgs = run.step_output(self._interrupted)
+            msgs = run.step_output(self._interrupted, limit)
         except Exception as err:  # HealthError, NeighbourOverflow, a stuck clock, a device error
             if not isinstance(err, (HealthError, NeighbourOverflow)):
                 err = f"{type(err).__name__}: {err}"
@@ -240,6 +269,18 @@ class Session:
             self._cond.notify_all()
         return True
 
+    def advance_to(self, target: float) -> str:
+        """clock: lockstep: the fluid is to reach ``target`` [s] and say so (``reached``), after the
+        targets before it; "" or why it is refused. A target the fluid has passed is answered at
+        once with its time, one past the end time or after a failure with where it stopped."""
+        with self._cond:
+            if len(self._targets) >= MAX_TARGETS:
+                return (f"{MAX_TARGETS} targets are waiting already; wait for their answers on ~/reached before "
+                        "sending more")
+            self._targets.append(target)
+            self._cond.notify_all()
+        return ""
+
     def restart_clock(self, t: float):
         """Follow the clock afresh from ``t`` (after the reset its going back asked for)."""
         with self._cond:
@@ -295,6 +336,8 @@ class Session:
                 return False, f"the run failed ({self.failure}); ~/reset rebuilds the scene"
             if run.done:
                 return False, f"the run is at end_time = {run.output.end_time:g} s; raise end_time or ~/reset"
+            if self.lockstep:
+                return False, "clock: lockstep moves the fluid only to the times sent on ~/advance_to"
             if self.active and not self.paused:
                 return False, "the solver is running; pause it first (~/set_paused true)"
             # the output after those already asked for; run.next_output has already moved past

@@ -13,7 +13,9 @@ body's frame ``<frame_id>/<name>``), ``~/bodies/force_arrows`` (markers), ``~/bo
 pressure_blocks/dNNNmm`` (the thesis's pressure-block force), ``~/probes/<name>`` (Vector3Stamped
 velocity, FluidPressure, PointStamped surface level), ``/clock`` (before the outputs it stamps),
 ``/diagnostics`` (1 Hz), a moving body's ``~/bodies/<name>/pose`` (PoseStamped) and ``/odom``
-(Odometry), and latched (transient local) ``~/scene``, ``~/geometry`` and, where tf2_msgs is
+(Odometry) (and, at ``wrench_rate``, ``wrench_fast``, ``pose_fast`` and ``odom_fast``), under ``clock:
+lockstep`` ``~/reached`` (std_msgs/Header) answering ``~/advance_to``, and latched (transient local)
+``~/scene``, ``~/geometry`` and, where tf2_msgs is
 installed, ``/tf_static`` (the fixed bodies' frames; a moving body's go on ``/tf``). z is up in
 every scene (``output.frames``); every stamp is simulated time.
 Services (std_srvs): ``~/reset``, ``~/set_paused``, ``~/step``, ``~/record``, ``~/save_state`` and
@@ -43,6 +45,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.qos_overriding_options import QoSOverridingOptions
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import PointCloud2
+from std_msgs.msg import Header
 from std_srvs.srv import SetBool, Trigger
 
 from .. import __version__
@@ -59,6 +62,7 @@ from .session import Session
 
 STEP_WAIT = 30.0  # [s] the longest ~/step waits for its output before it answers
 COMMAND_DEPTH = 10  # the commands a body's subscription holds until the commands thread takes them
+LOCKSTEP_DEPTH = 100  # ~/advance_to requests and ~/reached answers held for a slow reader (clock: lockstep)
 
 
 def _qos(reliable: bool, depth: int, transient_local: bool = False) -> QoSProfile:
@@ -131,7 +135,7 @@ class SimNode(LifecycleNode):
                 PointCloud2, "~/particles", _qos(**PARTICLES_QOS),
                 qos_overriding_options=QoSOverridingOptions.with_default_policies()),
         }
-        if self.value("clock") == "publish":  # follow: another node's; none: no one's
+        if self.value("clock") == "publish":  # follow, lockstep: another node's; none: no one's
             self._fixed_pubs["/clock"] = self.create_publisher(Clock, "/clock", _qos(**CLOCK_QOS))
         self._topic_pubs = dict(self._fixed_pubs)
         self._diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
@@ -156,8 +160,13 @@ class SimNode(LifecycleNode):
         self._reset_lock = threading.Lock()
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
-        self.session = Session(self._publish, self._report)
+        self.session = Session(self._publish, self._report, self._reached)
         self.session.max_lag = self.value("max_lag")
+        if self.value("clock") == "lockstep":
+            self.session.lockstep = True
+            self._reached_pub = self.create_publisher(Header, "~/reached", _qos(True, LOCKSTEP_DEPTH))
+            self._commands_node.create_subscription(Header, f"{self.namespace}/advance_to", self._advance_to,
+                                                    _qos(True, LOCKSTEP_DEPTH))
         if self.value("clock") == "follow":
             # on the commands' node: its one thread takes each tick in turn, off the services' threads
             self.session.following = True
@@ -388,7 +397,8 @@ class SimNode(LifecycleNode):
         """One publisher per topic of the scene's outputs (found from the outputs at t = 0);
         those of the previous scene that this one lacks are removed."""
         latched = run.latched_messages()
-        wanted = {topic: (type(msg), 10) for topic, msg in run.output_messages(0)
+        outputs = run.output_messages(0) + (run.fast_messages(clock=False) if run.output.wrench_rate else [])
+        wanted = {topic: (type(msg), 10) for topic, msg in outputs
                   if topic != "/clock"}  # /clock's is fixed (clock: publish) or none (follow, none)
         wanted |= {topic: (type(msg), _qos(**LATCHED_QOS)) for topic, msg in latched}
         for topic in list(self._topic_pubs):
@@ -605,6 +615,20 @@ class SimNode(LifecycleNode):
         if not answer.success:
             self.get_logger().error(f"the reset the clock asked for failed: {answer.message}")
         self.session.restart_clock(t)
+
+    @_quiet
+    def _advance_to(self, msg):
+        """clock: lockstep: the fluid is to reach the stamp of ``msg`` (std_msgs/Header); answered on
+        ~/reached, in order (Session.advance_to)."""
+        why = self.session.advance_to((msg.stamp.sec * 1_000_000_000 + msg.stamp.nanosec) / 1.0e9)
+        if why:
+            self.get_logger().warning(f"~/advance_to: {why}", throttle_duration_sec=1.0)
+
+    def _reached(self, target: float, t: float):
+        """A lockstep target answered: ~/reached carries the fluid's time, the target's where it got
+        there (short of it where the run ended or failed first, past it where it had passed it)."""
+        msg = Header(stamp=messages.stamp(t), frame_id=self.value("frame_id"))
+        self._send(self._reached_pub, msg)
 
     @_quiet
     def _tick(self):

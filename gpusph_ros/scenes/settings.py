@@ -31,11 +31,15 @@ NUMERIC_FIELDS = tuple(f.name for part in (Numerics, HealthLimits) for f in sett
 @dataclass
 class Output:
     """When a run stops and what it writes. Probes, wrenches and /clock go out at ``output_rate``;
-    particle clouds at ``particle_rate`` (0 = none), on the output steps nearest that rate."""
+    particle clouds at ``particle_rate`` (0 = none), on the output steps nearest that rate; the
+    bodies' wrenches, poses and twists also at ``wrench_rate`` (0 = not), on topics of their own."""
 
     end_time: float = 1.0  # [s] simulated
     output_rate: float = 100.0  # [Hz] simulated (the thesis's DamBreak 1 rate)
     particle_rate: float = 10.0  # [Hz] simulated
+    # [Hz] simulated: each body's wrench, pose and twist alone, the wrench the mean over the steps
+    # since the last (a controller's rate); 0 = with the outputs only
+    wrench_rate: float = 0.0
     # a recording's MCAP chunk compression: zstd is what `ros2 bag record -s mcap` writes by default,
     # lz4 is faster to write and larger, none the largest
     compression: str = "zstd"
@@ -119,7 +123,7 @@ def _coerce(key, value):
 def check_output(output: Output) -> Output:
     """``output``, or ConfigError naming the first field out of its range or choices (a setting, or
     what a state file says a run's outputs were)."""
-    for key in ("end_time", "output_rate", "particle_rate", "checkpoint_interval"):
+    for key in ("end_time", "output_rate", "particle_rate", "wrench_rate", "checkpoint_interval"):
         value = getattr(output, key)
         if not isinstance(value, (int, float)) or isinstance(value, bool):
             raise ConfigError(key, value, "a number")
@@ -136,6 +140,10 @@ def check_output(output: Output) -> Output:
     if not (math.isfinite(rate) and (rate == 0.0 or MIN_OUTPUT_RATE <= rate <= output.output_rate)):
         raise ConfigError("particle_rate", rate, f"0 (no particle clouds) or a rate in [{MIN_OUTPUT_RATE:g}, "
                                                  f"output_rate = {output.output_rate:g}] Hz")
+    rate = output.wrench_rate
+    if not (math.isfinite(rate) and (rate == 0.0 or MIN_OUTPUT_RATE <= rate <= MAX_OUTPUT_RATE)):
+        raise ConfigError("wrench_rate", rate, f"0 (the bodies' messages with the outputs only) or a rate in "
+                                               f"[{MIN_OUTPUT_RATE:g}, {MAX_OUTPUT_RATE:g}] Hz")
     if not (math.isfinite(output.checkpoint_interval) and 0.0 <= output.checkpoint_interval <= MAX_END_TIME):
         raise ConfigError("checkpoint_interval", output.checkpoint_interval,
                           f"a wall time in [0, {MAX_END_TIME:g}] s (0: no checkpoints)")
