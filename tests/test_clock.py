@@ -183,6 +183,15 @@ def test_a_lockstep_master_steps_the_fluid_as_a_free_run_with_the_same_stops(tmp
     with _node(domain, tmp_path / "sim_node.log", "clock:=lockstep", "wrench_rate:=1000.0", "end_time:=1.0",
                scene="paddle_2d", dx=0.04) as (_, client):
         client.subscribe("/sim_node/reached", Header, depth=1000)
+        # the answers are not kept for a late subscriber: this one is matched before the loop starts
+        client.wait_for("/diagnostics", lambda m: bool(m) and "running" in m[-1].status[0].message, timeout=300.0)
+        deadline = time.monotonic() + 30.0
+        while not any(s.node_name == "test_client" for s in
+                      client.node.get_subscriptions_info_by_topic("/sim_node/reached")) or \
+                client.node.count_publishers("/sim_node/reached") == 0:
+            assert time.monotonic() < deadline, "the node's ~/reached never showed"
+            time.sleep(0.05)
+        time.sleep(0.5)
         loop = subprocess.run([sys.executable, str(EXAMPLE), "--body", "paddle", "--step", "0.001", "--end", "0.5",
                                "--timeout", "120", "--out", str(rows)], env=_env(domain), capture_output=True,
                               text=True, timeout=600)

@@ -215,7 +215,9 @@ class Numerics:
                                 "default $GPUSPH_ROS_DEVICE, else cpu: the GPU path is written for CUDA but has "
                                 "not yet run on a GPU, docs/results/speed.md",
                           applies=RESET, node=True, factory=default_device)
-    cpu_threads: int = setting(0, "threads for the heavy passes on a CPU device; 0 = every core", applies=RESET)
+    cpu_threads: int = setting(0, "threads for the heavy passes on a CPU device; 0 = every core, or one for a run "
+                                  "of fewer than 3,000 particles (its loop then replays from a capture: faster)",
+                               applies=RESET)
     neighbour_search: str = setting("auto", "how a pass finds a particle's neighbours (sph/neighbours.py): lists "
                                             "(a list per particle, 4 B an entry: faster on a CPU), cells (no "
                                             "lists: each pass walks the cells around it), auto (cells on a GPU, "

@@ -62,6 +62,11 @@ from .state import (
 # these); a loop nobody interrupts runs to its target without the host
 _MAX_BATCH = 64
 _UNBOUNDED = 2 ** 31 - 1
+# a CPU run of fewer particles steps on one thread (cpu_threads 0): its loop then replays from a
+# capture, with no launch from Python, and handing its passes to a pool of threads costs more than
+# they save (paddle_2d on 2 cores: 483 particles, 2,684 steps/s replayed against 850 on two threads;
+# 2,456, 426 against 409; 4,878, 207 against 245)
+SMALL_RUN = 3000
 # steps between two sorts of the particle arrays into cell order: neighbours then sit next to each
 # other in memory, which the force passes (memory-bound on a CPU, coalesced on a GPU) need
 _REORDER_EVERY = 16
@@ -102,7 +107,7 @@ class Solver:
         self._h_particles = cfg.hdx * spacing
         self._level_h = [float(h) for h in np.unique(self._h_particles)]  # the levels' h, finest first
         self.params = self._make_params()
-        self.launch = Launcher(self.device, cfg.cpu_threads)
+        self.launch = Launcher(self.device, cfg.cpu_threads or (1 if self.n < SMALL_RUN else 0))
         self._allocate(particles)
         self.neighbours = NeighbourList(self.scalar, cfg.dim, 2.0 * cfg.h, cfg.domain_lo, cfg.domain_hi,
                                         cfg.periodic, self.ptype, self._needs_list, self.ghost,
