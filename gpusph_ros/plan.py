@@ -64,7 +64,7 @@ def plan(scene, run_config, calibration_steps: int = 30) -> dict:
     wp.synchronize_device(solver.device)
     wall = time.perf_counter() - start
     steps = solver.steps - steps0
-    dt = (solver.time - t0) / steps
+    dt = landed_dt((solver.time - t0) / steps, run_config.output)
     rate = steps / wall
     end = run_config.output.end_time
     until = reduce.valid_until(scene) if run_config.reduction.model == "2d_until_reflection" else {}
@@ -74,7 +74,15 @@ def plan(scene, run_config, calibration_steps: int = 30) -> dict:
             "fluid_particles": model.fluid_particles, "device_bytes": solver.device_bytes(),
             "calibration_steps": steps, "calibration_wall_s": wall, "dt": dt, "steps_per_s": rate,
             "mipps": solver.n * rate / 1e6, "end_time": end, "steps": int(round(end / dt)),
-            "wall_s": end / dt / rate}
+            "wall_s": end / dt / rate, "real_time_factor": dt * rate}
+
+
+def landed_dt(dt: float, output) -> float:
+    """The mean step of a run whose steps of ``dt`` land on each of its stops: the outputs and the
+    wrench-rate times (``output``: scenes.settings.Output), the finer of the two grids taken; a stop
+    closer than dt cuts the steps to it (runner.Run.step_output)."""
+    stop = 1.0 / max(output.output_rate, output.wrench_rate)
+    return stop / math.ceil(stop / dt - 1.0e-9)
 
 
 def estimate(scene, run_config) -> dict:
@@ -94,7 +102,7 @@ def estimate(scene, run_config) -> dict:
             here, free_dev = False, math.inf
     need, limit = resources.shortfall(n, cfg, free_dev=free_dev)
     end = run_config.output.end_time
-    dt = cfg.cfl * cfg.h / cfg.sound_speed
+    dt = landed_dt(cfg.cfl * cfg.h / cfg.sound_speed, run_config.output)
     steps = int(np.ceil(end / dt))
     fits = not limit if here else None
     searches = [search for search in NEIGHBOUR_SEARCHES if search != "auto"]
@@ -154,7 +162,8 @@ def estimate_text(e: dict) -> str:
         f"memory       {e['device_bytes'] / 2 ** 30:.3g} GiB on {e['device']} "
         f"({e['device_bytes'] / e['particles']:.0f} B a particle, {_SEARCHED[e['search']]}): {verdict}",
         f"             {searches}",
-        f"steps        at least {e['steps']:,} to t = {e['end_time']:g} s (dt <= cfl h / c0 = {e['dt']:.3g} s)",
+        f"steps        at least {e['steps']:,} to t = {e['end_time']:g} s (dt <= cfl h / c0, landing on each output: "
+        f"{e['dt']:.3g} s)",
     ]
     if "mipps" not in e:
         return "\n".join(lines + [f"cost         at least {e['particle_steps']:.3g} particle-steps: "
@@ -164,7 +173,8 @@ def estimate_text(e: dict) -> str:
     return "\n".join(lines + [
         f"wall time    at least {_duration(e['wall_s'])}: {e['particle_steps']:.3g} particle-steps at "
         f"{e['mipps']:.3g} MIPPS, measured on {c['device']} over {c['calibration_steps']} steps at dx = "
-        f"{c['dx']:.3g} m ({c['particles']:,} particles)"])
+        f"{c['dx']:.3g} m ({c['particles']:,} particles)",
+        f"real time    {e['end_time'] / e['wall_s']:.3g} simulated s per wall s at most"])
 
 
 _SEARCHED = {"lists": "with neighbour lists (a CPU's default)", "cells": "walking the cells (a GPU's default)"}
@@ -279,4 +289,6 @@ def text(p: dict) -> str:
         f"{p['steps_per_s']:.1f} steps/s, {p['mipps']:.3f} MIPPS",
         f"estimate     to t = {p['end_time']:g} s: about {p['steps']:,} steps (at least: faster flow, shorter steps), "
         f"about {p['wall_s'] / 60:.1f} min of wall time",
+        f"real time    {p['real_time_factor']:.3g} simulated s per wall s at most (the steps alone; the outputs cost "
+        "more: bench/realtime.py measures a node's run)",
     ] + ([f"validity     {validity(p)}"] if p["valid_until"] else []))

@@ -7,11 +7,12 @@ import numpy as np
 import pytest
 import warp as wp
 
-from gpusph_ros.plan import estimate, estimate_text, plan, plan_reductions, table, text, zone_option
+from gpusph_ros.plan import estimate, estimate_text, landed_dt, plan, plan_reductions, table, text, zone_option
+from gpusph_ros.runner import Run
 from gpusph_ros.scenes import resources
 from gpusph_ros.scenes.build import build
 from gpusph_ros.scenes.schema import load_scene
-from gpusph_ros.scenes.settings import resolve
+from gpusph_ros.scenes.settings import Output, resolve
 from gpusph_ros.sph import ConfigError, Solver
 
 from conftest import planned_bytes
@@ -47,6 +48,24 @@ def test_the_step_estimate_is_a_close_lower_bound(collapse):
     assert p["steps"] <= solver.steps <= 1.3 * p["steps"], (p["steps"], solver.steps)
     assert np.isfinite(p["wall_s"]) and p["wall_s"] > 0
     assert "about" in text(p) and "777" in text(p)
+    # the real-time factor it prints is the simulated time its estimate steps in its wall time
+    assert p["real_time_factor"] == pytest.approx(p["end_time"] / p["wall_s"])
+    assert "simulated s per wall s" in text(p)
+
+
+def test_the_steps_land_on_the_finer_of_the_output_and_wrench_rate_grids():
+    """A stop closer than a step cuts the steps to it: at 200 Hz, 2.53 ms steps become two of 2.5 ms
+    a stop, and a run with such stops takes the steps the plan counts (runner.Run.step_output)."""
+    assert landed_dt(2.53e-3, Output(output_rate=20.0, wrench_rate=200.0)) == pytest.approx(2.5e-3, rel=1e-12)
+    assert landed_dt(2.4e-3, Output(output_rate=20.0)) == pytest.approx(0.05 / 21, rel=1e-12)
+    assert landed_dt(1.0e-3, Output(output_rate=100.0, wrench_rate=50.0)) == pytest.approx(1.0e-3, rel=1e-12)
+    scene = load_scene("paddle_2d")
+    config = resolve(scene, dx=0.1, end_time=0.1, wrench_rate=200.0, particle_rate=0.0)
+    p = plan(scene, config, calibration_steps=30)
+    run = Run(scene, config)
+    while not run.done:
+        run.step_output()
+    assert run.solver.steps == p["steps"] == 40  # two steps a 5 ms stop, at rest
 
 
 def test_a_scene_is_priced_with_and_without_zones():
