@@ -59,3 +59,16 @@ def test_domain_periodic_and_planes_are_checked():
         SolverConfig(planes=[Plane(point=(0, 0, 0), normal=(0, 0, 0))]).validate()
     with pytest.raises(ConfigError, match="gravity"):
         SolverConfig(dim=2, gravity=(0, 0, -9.81)).validate()
+
+
+def test_on_and_off_read_as_yaml_booleans_are_the_words():
+    """``--set step_graph=off`` reads as YAML 1.1's false: a name setting takes it as "off" (and "on"),
+    and its choices still decide (``kernel=yes`` names kernel and its choices)."""
+    from gpusph_ros.scenes.schema import load_scene
+    from gpusph_ros.scenes.settings import resolve
+
+    scene = load_scene("collapse_2d")
+    assert resolve(scene, sets=["step_graph=off"]).solver.step_graph == "off"
+    assert resolve(scene, sets=["step_graph=on"]).solver.step_graph == "on"
+    with pytest.raises(ConfigError, match="kernel: 'on' is not allowed; expected one of quadratic, cubic_spline"):
+        resolve(scene, sets=["kernel=yes"])

@@ -316,7 +316,8 @@ def test_a_stop_request_ends_the_run_between_steps_and_closes_the_file(tmp_path)
     """What gpusph-run's SIGTERM handler does: ``stop`` answering true ends the run at the next
     step with status 'interrupted', the steps taken so far kept and the recording closed whole."""
     scene = load_scene("collapse_2d")
-    run = Run(scene, resolve(scene, sets=["dx=0.0076", "end_time=0.3"]))
+    # the eager loop, which asks before every step (a small run's replayed loop asks every 64)
+    run = Run(scene, resolve(scene, sets=["dx=0.0076", "end_time=0.3", "step_graph=off"]))
     asked = []
 
     def stop():  # asked before every step (and after each batch): true from the 40th question on

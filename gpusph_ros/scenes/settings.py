@@ -115,6 +115,8 @@ def _coerce(key, value):
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ConfigError(key, value, "a number")
         value = float(value)
+    elif isinstance(default, str) and isinstance(value, bool):
+        value = "on" if value else "off"  # YAML 1.1 read `step_graph=off` as false; the choices check it
     elif isinstance(default, str) and not isinstance(value, str):
         raise ConfigError(key, value, "a name (string)")
     return value
