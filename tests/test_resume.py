@@ -204,7 +204,7 @@ def test_a_run_of_a_scene_file_resumes_from_another_folder(tmp_path):
                                                                                  "name: my_collapse"))
     work = tmp_path / "work"
     work.mkdir()
-    sets = [a for s in ["dx=0.01", "end_time=0.2"] for a in ("--set", s)]
+    sets = [a for s in ["dx=0.01", "end_time=1.0"] for a in ("--set", s)]
     proc = subprocess.Popen([sys.executable, "-m", "gpusph_ros.cli", "run", "my_collapse.yaml", *sets, "--quiet",
                              "--out", str(work / "bag")], cwd=tmp_path, stdout=subprocess.PIPE,
                             stderr=subprocess.STDOUT, text=True)

@@ -721,13 +721,16 @@ class Solver:
         The device runs the loop (``wp.capture_while`` on its RUNNING flag, or its captured graph:
         graph.py): it decides each step's size, when to stop and what each step does, and the host
         reads the clock and the health flags once, at the end. ``interrupt``, a callable, is asked
-        before each step of the eager loop, and every _MAX_BATCH steps of a replayed one: when it
+        before each step of the eager loop, and before the first and every _MAX_BATCH steps of a
+        replayed one: when it
         answers true the solver stops early, between two steps (a node pausing mid-interval);
         ``reached`` tells.
         Raises HealthError when a step fails a check; the state is then the last healthy one.
         """
         self._sync()
-        if self.reached(t_target):
+        if self.reached(t_target) or (interrupt is not None and interrupt()):
+            # asked before the first step, as the eager loop asks: a replayed loop that reaches each
+            # target within a block would otherwise never ask, and a SIGTERM waited for the run's end
             return self.time
         before = self.time
         replay = graph.wanted(self.config.step_graph, self.device, self.launch.threads)
