@@ -163,7 +163,11 @@ class Session:
                     limit = self._targets[0] if self.lockstep else None
             if run is None:
                 for target, t in answers:
-                    self._reached(target, t)
+                    try:
+                        self._reached(target, t)
+                    except Exception as err:  # a publisher torn down: the thread goes on
+                        self._report("error", f"~/reached for t = {target:.6f} s was not sent: "
+                                              f"{type(err).__name__}: {err}")
                 continue
             try:
                 self._advance(run, limit)
