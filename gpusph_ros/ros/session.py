@@ -5,8 +5,11 @@ between two steps for a pause, a step request, a reset, a live parameter change 
 ROS callbacks run in other threads and only set flags and wait briefly: the solver asks
 ``_interrupted`` before every step of its eager loop, so nothing waits longer than one step (every
 64 steps of a replayed loop: a GPU, or one CPU thread; sph/graph.py). All Warp work runs
-in this thread, except a reset's build, which runs while this thread is held idle. Whatever a
-step raises ends the run as a failure the node reports; the thread never dies of it.
+in this thread, except what a service does while it owns the solver (a reset's build, a capture,
+a restore): one service at a time owns it (``_held``), the others wait their turn up to
+``OWNER_WAIT`` and are then refused, and the thread steps only while nobody owns it. A bag takes
+only the messages of the run it was opened for. Whatever a step raises ends the run as a failure
+the node reports; the thread never dies of it.
 """
 import collections
 import datetime
@@ -23,6 +26,11 @@ from .node_params import LIVE_SETTINGS
 
 NODE_STATE = "node state"  # the kind of state file ~/save_state writes (a gpusph-run checkpoint is another)
 MAX_TARGETS = 1000  # lockstep targets waiting at once; past them a request is refused (a flood of them)
+OWNER_WAIT = 120.0  # [s] the longest a service waits for another to give the solver back (a large reset's build)
+
+
+class Busy(RuntimeError):
+    """Another service owned the solver for longer than ``OWNER_WAIT``: the request is refused."""
 
 
 class Session:
@@ -34,7 +42,12 @@ class Session:
     def __init__(self, publish, report, reached=None):
         self._publish, self._report, self._reached = publish, report, reached
         self._cond = threading.Condition()
-        self._record_lock = threading.Lock()
+        # re-entrant: a reset or a load finishes the old run's bag and swaps the run under it, so
+        # that no ~/record between the two opens a bag for the run that is going
+        self._record_lock = threading.RLock()
+        self._recording_run = None  # the run the open bag belongs to
+        self._owner = threading.Lock()  # held by the one service that owns the solver (_held)
+        self._owner_what = ""
         self.run = None
         self.active = False  # the lifecycle state allows stepping
         self.paused = False
@@ -198,7 +211,7 @@ class Session:
         if "particle_fields" in changes or "frame_id" in changes:
             run.set_cloud(changes.get("particle_fields"), changes.get("frame_id"))
         if "frame_id" in changes:  # the geometry and the body frames, in the new frame
-            self._emit(run.latched_messages(), run.solver.time)
+            self._emit(run, run.latched_messages(), run.solver.time)
 
     def _advance(self, run, limit=None):
         try:
@@ -216,7 +229,7 @@ class Session:
             return
         t = run.solver.time
         try:
-            self._emit(msgs, t)
+            self._emit(run, msgs, t)
         except Exception as err:  # a full disk, a publisher torn down: the run goes on, the bag is finished
             self.stop_recording(f"failed: the recording could not be written: {type(err).__name__}: {err}")
             self._report("error", f"the output at t = {t:.4f} s was not sent or recorded: {type(err).__name__}: "
@@ -230,13 +243,15 @@ class Session:
             self._report("info", f"reached end_time = {run.output.end_time:g} s after {run.solver.steps} steps")
         self._keep_pace(t)
 
-    def _emit(self, msgs, t):
+    def _emit(self, run, msgs, t):
+        """Publish ``run``'s messages at ``t``, and record them where the open bag is ``run``'s."""
         with self._record_lock:
+            recorder = self.recorder if self._recording_run is run else None
             for topic, msg in msgs:
                 data = serialize_message(msg)  # once, for the publisher and the file
                 self._publish(topic, msg, data)
-                if self.recorder is not None:
-                    self.recorder.write(topic, msg, t, data)
+                if recorder is not None:
+                    recorder.write(topic, msg, t, data)
 
     def _keep_pace(self, t):
         rtf = self.real_time_factor
@@ -375,34 +390,46 @@ class Session:
         current (paused or running as before). If ``build`` raises, the old run stays."""
         def swap(_):
             run = build()
-            self.stop_recording("reset")
-            with self._cond:
-                self.run, self.failure, self._step_to, self._published, self._pending = run, "", -1, -1, {}
-                self._fluid_t = run.solver.time
-                self._generation += 1
-                self._pace = self._window = None
+            with self._record_lock:
+                self.stop_recording("reset")
+                with self._cond:
+                    self.run, self.failure, self._step_to, self._published, self._pending = run, "", -1, -1, {}
+                    self._fluid_t = run.solver.time
+                    self._generation += 1
+                    self._pace = self._window = None
             return run
 
-        run = self._held(swap)
+        run = self._held(swap, "a reset")
         # the old run's solver holds cycles (its step hooks, its captured loop), so only the cyclic
         # collector frees its arrays and its launch threads: a soak of resets held up to 70 threads
         # and their runs' memory until it ran, and on a GPU that memory is the next build's
         gc.collect()
         return run
 
-    def _held(self, work):
-        """``work(run)`` with the solver held between two steps; what it returns."""
-        with self._cond:
-            self._hold = True
-            self._cond.notify_all()
-            while self._busy:
-                self._cond.wait()
+    def _held(self, work, what: str):
+        """``work(run)`` with the solver held between two steps, owned by this caller alone (``what``
+        it does, for the refusal of the next one); what it returns. Raises ``Busy`` after waiting
+        ``OWNER_WAIT`` for another owner: a second owner's work must not run beside the first's, nor
+        may the first, finishing, let the solver step under the second's (a reset's build)."""
+        if not self._owner.acquire(timeout=OWNER_WAIT):
+            raise Busy(f"the solver is busy with {self._owner_what or 'another request'} for more than "
+                       f"{OWNER_WAIT:g} s; try again")
         try:
-            return work(self.run)
-        finally:
+            self._owner_what = what
             with self._cond:
-                self._hold = False
+                self._hold = True
                 self._cond.notify_all()
+                while self._busy:
+                    self._cond.wait()
+            try:
+                return work(self.run)
+            finally:
+                with self._cond:
+                    self._hold = False
+                    self._cond.notify_all()
+        finally:
+            self._owner_what = ""
+            self._owner.release()
 
     def save_state(self, path) -> tuple:
         """(success, message): the run's whole state (``Run.checkpoint``), with the scene and
@@ -411,8 +438,11 @@ class Session:
             return False, "no scene is loaded: configure the node (or call ~/reset)"
         if self.failure:
             return False, f"the run failed ({self.failure}); its state is not kept; ~/reset or ~/load_state"
-        state = self._held(lambda run: {"scene": run.scene.text, "settings": run.run_config.as_dict(),
-                                        "run": run.checkpoint(), "t": run.solver.time})
+        try:
+            state = self._held(lambda run: {"scene": run.scene.text, "settings": run.run_config.as_dict(),
+                                            "run": run.checkpoint(), "t": run.solver.time}, "a save")
+        except Busy as err:
+            return False, f"not saved: {err}"
         try:
             written = state_file.write(path, NODE_STATE, state)
         except state_file.StateFileError as err:
@@ -443,27 +473,31 @@ class Session:
 
         def load(run):
             fitted = run.check_state(state["run"])
-            self.stop_recording("stopped: a saved state was loaded")  # its time would go back
-            run.restore(state["run"], fitted)
-            with self._cond:
-                self.failure, self._step_to, self._published = "", -1, run.next_output - 1
-                self._generation += 1
-                self._pace = self._window = None
+            with self._record_lock:  # its time would go back: the bag under way is finished first
+                self.stop_recording("stopped: a saved state was loaded")
+                run.restore(state["run"], fitted)
+                with self._cond:
+                    self.failure, self._step_to, self._published = "", -1, run.next_output - 1
+                    self._generation += 1
+                    self._pace = self._window = None
 
         try:
-            self._held(load)
+            self._held(load, "a load")
+        except Busy as err:
+            return False, f"not loaded: {err}"
         except (KeyError, TypeError, ValueError) as err:  # checked before the run changes
             return False, f"cannot load the state in {path}: {err}"
         return True, f"loaded the state at t = {self.run.solver.time:.4f} s from {path}; {self.state}"
 
     def clear(self):
         """Drop the run (lifecycle cleanup)."""
-        self.stop_recording("stopped")
-        with self._cond:
-            self._hold = True
-            while self._busy:
-                self._cond.wait()
-            self.run, self.failure, self._hold = None, "", False
+        def drop(_):
+            with self._record_lock:
+                self.stop_recording("stopped")
+                with self._cond:
+                    self.run, self.failure = None, ""
+
+        self._held(drop, "a cleanup")
 
     def close(self, status: str = "interrupted"):
         """Stop the thread (between two steps) and finish the recording."""
@@ -484,12 +518,13 @@ class Session:
             run = self.run
             stamp = datetime.datetime.now(datetime.timezone.utc).strftime("%Y_%m_%d-%H_%M_%S_%f")
             self.recorder = run.open_recording(Path(directory).expanduser() / f"{run.scene.name}_{stamp}", compression)
+            self._recording_run = run
             return self.recorder.path
 
     def stop_recording(self, status: str):
         """Finish the recording, if any, with the run's result under ``status``; returns its path."""
         with self._record_lock:
-            recorder, self.recorder = self.recorder, None
+            recorder, self.recorder, self._recording_run = self.recorder, None, None
             if recorder is None:
                 return None
             try:
