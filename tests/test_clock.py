@@ -13,7 +13,11 @@ for a robot simulator's, at 1 kHz of simulated time, in a process of its own on 
   ``paddle_2d`` at 4 cm 1 ms at a time for 0.5 s; each target is answered once, in order, with
   itself, and the paddle's wrench at each (``wrench_rate: 1000``) equals a free run's with the same
   stops (a headless run of the same settings) to round-off. A target the fluid has passed is
-  answered at once with its time, ~/step is refused, and nothing is published on /clock.
+  answered at once with its time, ~/step is refused, and nothing is published on /clock. Then
+  bursts of 500 and 1,500 targets sent within a few ms (issue 66, item 2: a depth of 100 left the
+  middle of a burst unanswered): every target is answered, with itself, or, past the 1,000 the node
+  takes at once, refused at once (its own stamp, frame_id ``refused``) and counted on /diagnostics;
+  none is lost.
 """
 import contextlib
 import os
@@ -27,6 +31,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import Header
@@ -182,11 +187,13 @@ def test_a_lockstep_master_steps_the_fluid_as_a_free_run_with_the_same_stops(tmp
     domain, rows = 80 + os.getpid() % 20, tmp_path / "loop.csv"  # apart from the other tests' domains
     with _node(domain, tmp_path / "sim_node.log", "clock:=lockstep", "wrench_rate:=1000.0", "end_time:=1.0",
                scene="paddle_2d", dx=0.04) as (_, client):
-        client.subscribe("/sim_node/reached", Header, depth=1000)
+        client.subscribe("/sim_node/reached", Header, depth=4000)
+        burst = client.node.create_publisher(Header, "/sim_node/advance_to",
+                                             QoSProfile(depth=2000, reliability=ReliabilityPolicy.RELIABLE))
         # the answers are not kept for a late subscriber: this one is matched before the loop starts
         client.wait_for("/diagnostics", lambda m: bool(m) and "running" in m[-1].status[0].message, timeout=300.0)
         deadline = time.monotonic() + 30.0
-        while client.node.count_publishers("/sim_node/reached") == 0:
+        while client.node.count_publishers("/sim_node/reached") == 0 or burst.get_subscription_count() == 0:
             assert time.monotonic() < deadline, "the node's ~/reached never showed"
             time.sleep(0.05)
         time.sleep(0.5)
@@ -199,10 +206,28 @@ def test_a_lockstep_master_steps_the_fluid_as_a_free_run_with_the_same_stops(tmp
         assert [a.stamp.sec * 1_000_000_000 + a.stamp.nanosec for a in answers] == [
             k * 1_000_000 for k in range(1, 501)]
         # a target the fluid has passed: answered at once with where it is
-        client.node.create_publisher(Header, "/sim_node/advance_to", 10).publish(
-            Header(stamp=_stamp(0.2).clock))
+        burst.publish(Header(stamp=_stamp(0.2).clock))
         late = client.wait_for("/sim_node/reached", lambda m: len(m) == 501, timeout=30.0)[-1]
         assert _t(late.stamp) == pytest.approx(0.5, abs=1e-9)
+        # bursts: 500 targets 0.5 ms apart, all taken and answered with themselves; then 1,500 0.1 ms
+        # apart, past the 1,000 the node takes at once: each answered or refused, none lost
+        done = 501
+        for count, spacing in ((500, 500_000), (1500, 100_000)):
+            start_ns = 500_000_000 + 500 * 500_000 if count == 1500 else 500_000_000
+            targets = [start_ns + k * spacing for k in range(1, count + 1)]
+            for ns in targets:
+                burst.publish(Header(stamp=_stamp(ns / 1e9).clock))
+            answers = client.wait_for("/sim_node/reached", lambda m, n=done + count: len(m) >= n, timeout=120.0)
+            got = answers[done:]
+            done += count
+            refused = [a for a in got if a.frame_id == "refused"]
+            assert sorted(a.stamp.sec * 1_000_000_000 + a.stamp.nanosec for a in got) == targets
+            reached = [a.stamp.sec * 1_000_000_000 + a.stamp.nanosec for a in got if a.frame_id != "refused"]
+            assert reached == sorted(reached)  # the taken ones in order
+            values = _diagnostic(client, time.monotonic())
+            assert int(values["lockstep_lost"]) == 0 and int(values["lockstep_waiting"]) == 0
+            assert int(values["lockstep_refused"]) == len(refused)
+            assert (refused == []) if count == 500 else (len(refused) > 0)
         answer = client.call("step", Trigger)
         assert not answer.success and "lockstep" in answer.message
         assert client.received("/clock") == [] and client.node.get_publishers_info_by_topic("/clock") == []

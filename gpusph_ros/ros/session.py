@@ -75,6 +75,8 @@ class Session:
         # the fluid steps only towards the first, and lands on it
         self.lockstep = False
         self._targets = collections.deque()
+        self.lockstep_refused = 0  # targets refused past MAX_TARGETS (each answered with "refused")
+        self.lockstep_lost = 0  # targets the middleware dropped before the node read them
         self._thread = threading.Thread(target=self._loop, name="solver", daemon=True)
         self._thread.start()
 
@@ -134,7 +136,8 @@ class Session:
                        clock_lag=0.0 if limit is None else max(limit - self._fluid_t, 0.0),
                        clock_lag_worst=self._lag_worst, clock_lag_over=self._lag_over)
         if self.lockstep:
-            out.update(lockstep_waiting=len(self._targets))
+            out.update(lockstep_waiting=len(self._targets), lockstep_refused=self.lockstep_refused,
+                       lockstep_lost=self.lockstep_lost)
         if run is None:
             return out
         solver, now = run.solver, time.perf_counter()
@@ -294,6 +297,7 @@ class Session:
         once with its time, one past the end time or after a failure with where it stopped."""
         with self._cond:
             if len(self._targets) >= MAX_TARGETS:
+                self.lockstep_refused += 1
                 return (f"{MAX_TARGETS} targets are waiting already; wait for their answers on ~/reached before "
                         "sending more")
             self._targets.append(target)

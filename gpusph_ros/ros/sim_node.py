@@ -58,11 +58,15 @@ from ..sph.config import shown
 from . import frame_follow, node_params
 from .frame_follow import FrameFollower
 from .node_params import PARAMS
-from .session import Session
+from .session import MAX_TARGETS, Session
 
 STEP_WAIT = 30.0  # [s] the longest ~/step waits for its output before it answers
 COMMAND_DEPTH = 10  # the commands a body's subscription holds until the commands thread takes them
-LOCKSTEP_DEPTH = 100  # ~/advance_to requests and ~/reached answers held for a slow reader (clock: lockstep)
+# ~/advance_to requests and ~/reached answers held for a slow reader (clock: lockstep): room for twice
+# the targets the session takes at once, so that a burst the session refuses in part is still read
+# whole and each of its targets answered (a depth of 100 lost the middle of a burst of 500 unanswered)
+LOCKSTEP_DEPTH = 2 * MAX_TARGETS
+REFUSED = "refused"  # a ~/reached answer's frame_id for a target refused (its stamp is the target's)
 
 
 def _qos(reliable: bool, depth: int, transient_local: bool = False) -> QoSProfile:
@@ -165,8 +169,9 @@ class SimNode(LifecycleNode):
         if self.value("clock") == "lockstep":
             self.session.lockstep = True
             self._reached_pub = self.create_publisher(Header, "~/reached", _qos(True, LOCKSTEP_DEPTH))
-            self._commands_node.create_subscription(Header, f"{self.namespace}/advance_to", self._advance_to,
-                                                    _qos(True, LOCKSTEP_DEPTH))
+            self._lockstep_seq = None
+            self._advance_sub = self._commands_node.create_subscription(
+                Header, f"{self.namespace}/advance_to", self._advance_to, _qos(True, LOCKSTEP_DEPTH))
         if self.value("clock") == "follow":
             # on the commands' node: its one thread takes each tick in turn, off the services' threads
             self.session.following = True
@@ -617,11 +622,21 @@ class SimNode(LifecycleNode):
         self.session.restart_clock(t)
 
     @_quiet
-    def _advance_to(self, msg):
+    def _advance_to(self, msg, info):
         """clock: lockstep: the fluid is to reach the stamp of ``msg`` (std_msgs/Header); answered on
-        ~/reached, in order (Session.advance_to)."""
+        ~/reached, in order (Session.advance_to). A target refused (too many waiting) is answered at
+        once with its own stamp and frame_id ``refused``, and counted (/diagnostics:
+        lockstep_refused); targets the middleware dropped unread are counted (lockstep_lost)."""
+        seq = info.get("publication_sequence_number") if isinstance(info, dict) else None
+        last, self._lockstep_seq = self._lockstep_seq, seq or self._lockstep_seq
+        if seq and last is not None and seq > last + 1 and self._advance_sub.get_publisher_count() == 1:
+            self.session.lockstep_lost += seq - last - 1
+            self.get_logger().error(f"~/advance_to: {seq - last - 1} targets were dropped before the node read "
+                                    f"them (a queue of {LOCKSTEP_DEPTH}); they are not answered",
+                                    throttle_duration_sec=1.0)
         why = self.session.advance_to((msg.stamp.sec * 1_000_000_000 + msg.stamp.nanosec) / 1.0e9)
         if why:
+            self._send(self._reached_pub, Header(stamp=msg.stamp, frame_id=REFUSED))
             self.get_logger().warning(f"~/advance_to: {why}", throttle_duration_sec=1.0)
 
     def _reached(self, target: float, t: float):
