@@ -234,6 +234,8 @@ def _repair(bag) -> int:
     if not found["repaired"]:
         print(f"{found['file']} is whole: nothing to repair")
         return 0
+    if found["problem"]:
+        print(f"{found['file']} ends whole but cannot be read: {found['problem']}")
     print(f"repaired {found['file']}: {found['messages']} messages on {len(found['topics'])} topics recovered "
           f"from its complete chunks (the cut file is kept as {found['cut_file']})")
     return 0

@@ -442,3 +442,31 @@ def _one_chunk(chunk):
     Header(profile="ros2", library="test").write(builder)
     chunk.write(builder)
     return BytesIO(MCAP0_MAGIC + builder.end())
+
+
+def test_repair_names_what_a_whole_looking_file_cannot_read(tmp_path):
+    """Issue 66, item 8: a bag that ends with its footer but whose record after the header declares
+    16 GiB was called whole ("nothing to repair") while neither gpusph-analyze nor rosbags could read
+    it. --repair names the record and its byte offset, and keeps what stands before it."""
+    from gpusph_ros.output.messages import clock
+    from gpusph_ros.output.recording import BagRecorder, qos_yaml
+
+    bag = tmp_path / "edited"
+    recorder = BagRecorder(bag, {"scene": "none"}, chunk_size=2048)
+    recorder.add_topic("/clock", "rosgraph_msgs/msg/Clock", qos_yaml())
+    for k in range(100):
+        recorder.write("/clock", clock(k * 1e-3), k * 1e-3)
+    recorder.close({"status": "completed"})
+    file = bag / "edited_0.mcap"
+    data = bytearray(file.read_bytes())
+    second = 8 + 9 + int.from_bytes(data[9:17], "little")  # the record after the magic and the header
+    data[second + 1:second + 9] = (16 << 30).to_bytes(8, "little")
+    file.write_bytes(bytes(data))
+    fixed = subprocess.run([sys.executable, "-m", "gpusph_ros.cli", "analyze", "--repair", str(bag)],
+                           capture_output=True, text=True, timeout=120)
+    assert fixed.returncode == 0, fixed.stdout + fixed.stderr
+    assert (f"ends whole but cannot be read: the record at byte {second:,} (opcode 0x{data[second]:02x}) declares "
+            f"17,179,869,184 bytes") in fixed.stdout, fixed.stdout
+    assert "0 messages" in fixed.stdout
+    with AnyReader([bag]) as reader:  # what is left opens
+        assert reader.message_count == 0

@@ -340,6 +340,36 @@ def is_whole(file) -> bool:
     return tail.startswith(_FOOTER) and tail.endswith(MCAP0_MAGIC)
 
 
+def unreadable(file) -> str:
+    """What in an MCAP file, whole or not, cannot be read, with its byte offset; "" where every
+    record reads. The records' framing (an opcode and a length each) is walked first, so that a
+    length past the end of the file is named where it stands without reading it; then each record
+    is parsed, its chunks opened within their caps."""
+    file = Path(file)
+    size = file.stat().st_size
+    with open(file, "rb") as f:
+        if f.read(len(MCAP0_MAGIC)) != MCAP0_MAGIC:
+            return "it does not begin with the MCAP magic"
+        offset = len(MCAP0_MAGIC)
+        while offset < size - len(MCAP0_MAGIC):
+            head = f.read(9)
+            if len(head) < 9:
+                return f"the record at byte {offset:,} is cut inside its opcode and length"
+            length = int.from_bytes(head[1:], "little")
+            if offset + 9 + length > size:
+                return (f"the record at byte {offset:,} (opcode 0x{head[0]:02x}) declares {length:,} bytes, past the "
+                        f"file's end at byte {size:,}")
+            offset += 9 + length
+            f.seek(offset)
+        f.seek(0)
+        try:
+            for _ in read_records(f):
+                pass
+        except Exception as err:
+            return f"a record before byte {f.tell():,} cannot be read: {type(err).__name__}: {err}"
+    return ""
+
+
 def _records(f):
     """The records of an MCAP stream up to where it is cut: a cut can fall anywhere, inside the
     magic, a record's header or a chunk, and the MCAP reader then raises whatever its parse meets
@@ -366,15 +396,21 @@ def repair(path, compression: str = "zstd", keep: int = None) -> dict:
     """Rebuild a killed recording's MCAP summary and footer from its complete chunks, in place
     (the bag's last file; the cut file is kept beside it as ``<file>.cut``, its chunks written
     again with ``compression``; with ``keep``, whole or not, only its first ``keep`` messages, those
-    a checkpoint counted), and its metadata.yaml. Returns what was found: repaired (False for a whole file,
-    left as it is), messages and topics recovered."""
+    a checkpoint counted), and its metadata.yaml. A file that ends whole but holds a record that cannot
+    be read (``unreadable``) is repaired as a cut one, to the record before. Returns what was found:
+    repaired (False for a whole file that reads, left as it is), messages and topics recovered, and
+    the problem of a whole file that did not read ("" otherwise)."""
     path = Path(path)
     files = bag_files(path) if path.is_dir() else []
     if not files:
         raise FileNotFoundError(f"{path}: no .mcap file here; expected a bag directory")
     source = files[-1]
+    problem = ""
     if keep is None and is_whole(source):
-        return {"repaired": False, "file": str(source)}
+        # a footer says the writer finished, not that every record before it reads
+        problem = unreadable(source)
+        if not problem:
+            return {"repaired": False, "file": str(source)}
     cut = source.with_name(source.name + ".cut")
     source.replace(cut)
     topics, count, first, last = {}, 0, None, None
@@ -417,5 +453,5 @@ def repair(path, compression: str = "zstd", keep: int = None) -> dict:
     write_metadata_yaml(path, [*file_entries(path, len(files) - 1), {"path": source.name, "topics": topics,
                                                                       "count": count, "first": first, "last": last}])
     return {"repaired": True, "file": str(source), "cut_file": str(cut), "messages": count,
-            "topics": {name: e["count"] for name, e in topics.items()}}
+            "topics": {name: e["count"] for name, e in topics.items()}, "problem": problem}
 
