@@ -113,6 +113,45 @@ def test_an_edited_state_is_refused_whole_and_changes_nothing():
     solver.advance(0.02)
 
 
+@pytest.mark.parametrize("search", ["lists", "cells"])
+def test_a_state_whose_list_rebuild_data_do_not_follow_from_its_positions_is_refused(search):
+    """Issue 66, item 3: the sort reversed, the build positions moved (by 1 m, by 0.3 dx, to 1e30),
+    the cell ranges emptied or spread over every particle, the list lengths zeroed or cut: each
+    loaded with success and moved a resumed run by up to a millimetre, or failed its first step.
+    Each is refused, naming what does not follow from the positions, and the solver is unchanged."""
+    solver = build(parse_scene(BODIES), dx=0.02, neighbour_search=search).solver()
+    solver.advance(0.05)
+    good = checkpoint.capture(solver)
+    before = _digest(solver)
+    n, a = solver.n, good["arrays"]
+
+    def edited(**arrays):
+        return {"arrays": {**a, **arrays}, "host": good["host"]}
+
+    order = a["neighbours._order"].copy()
+    order[:n] = order[:n][::-1]
+    x = a["neighbours._x_build"]
+    sort, ranges, moved = "is not the cell sort of the build positions", "are not the cell ranges", "from its build"
+    positions = f"{sort}|{ranges}|{moved}"  # a moved build position shows first in whichever it breaks
+    cases = [(edited(**{"neighbours._order": order}), sort),
+             (edited(**{"neighbours._x_build": x + np.float32(1.0)}), positions),
+             (edited(**{"neighbours._x_build": x + np.float32([0.006, 0.0, 0.0])}), positions),
+             (edited(**{"neighbours._x_build": np.full_like(x, 1e30)}), positions),
+             (edited(**{"neighbours._start": np.zeros_like(a["neighbours._start"]),
+                        "neighbours._end": np.zeros_like(a["neighbours._end"])}), ranges),
+             (edited(**{"neighbours._start": np.zeros_like(a["neighbours._start"]),
+                        "neighbours._end": np.full_like(a["neighbours._end"], n)}), ranges)]
+    if search == "lists":
+        cases += [(edited(**{"neighbours.count": np.zeros_like(a["neighbours.count"])}), "neighbours.count is not"),
+                  (edited(**{"neighbours.count": np.minimum(a["neighbours.count"], 3)}), "neighbours.count is not")]
+    for state, why in cases:
+        with pytest.raises(ValueError, match=why):
+            checkpoint.restore(solver, state)
+        assert _digest(solver) == before, why
+    checkpoint.restore(solver, good)
+    assert _digest(solver) == before
+
+
 
 @pytest.mark.parametrize("major", [False, True])
 def test_a_state_holds_no_lists_and_they_are_built_again_as_they_were(major):

@@ -11,6 +11,11 @@ launcher) is built again from the same configuration.
 
 The lists are stored, not rebuilt from their build positions: particles change level between two
 builds (levels.py) and a list built again after that would differ from the one the run holds.
+What rebuilds them is checked against the positions it claims (``_sort``): the last sort orders
+the build positions by cell, as the sort does, the cell ranges are that order's, every particle
+stands within the half skin of its build position while the lists are fresh, and each fluid
+particle's list length is what a build from those positions finds. An edited order, build position
+or count moved a resumed run by up to a millimetre, and loaded without a word.
 
 A state comes from a file, and a file may have been edited: it is checked whole before anything
 changes (``mismatch``). Every array has this solver's shape and dtype exactly; the arrays whose
@@ -245,7 +250,8 @@ def mismatch(solver, state) -> str:
                     return f"its {holder} value {name} is not a value this solver can carry on from"
             elif not _equal(live, given[name]):
                 return f"its {holder} value {name} differs from this solver's: the state is of another run"
-    return _values(solver, state["arrays"], state["host"])
+    # last: it runs the sort's and the lists' passes over the state, whose every value must be in range
+    return _values(solver, state["arrays"], state["host"]) or _sort(solver, state["arrays"], _width(state))
 
 
 def _lists(solver, state) -> str:
@@ -262,6 +268,88 @@ def _lists(solver, state) -> str:
         return f"its neighbour lists are {width} wide, more than this solver's {widest}"
     if count.min(initial=0) < 0 or count.max(initial=0) > width:
         return f"neighbours.count lies outside [0, {width}]"
+    return ""
+
+
+def _sort(solver, arrays: dict, width: int) -> str:
+    """What in the last build a state holds does not follow from the positions it was built on, or
+    "": its sort, cell ranges, build positions and (with lists) its fluid particles' list lengths,
+    each worked out again with the solver's own passes (the cell keys and a list's search)."""
+    nl = solver.neighbours
+    n, device = solver.n, solver.device
+    if int(arrays["neighbours.builds"][0]) == 0:  # nothing built yet: the first step builds it all
+        return ""
+    order = arrays["neighbours._order"][:n]
+    if not _permutation(order, n):
+        return f"neighbours._order does not begin with an order of this solver's {n} particles"
+    vec = nl._x_build.dtype
+    x_build = arrays["neighbours._x_build"]
+    if nl.cells:
+        built = arrays["neighbours._ptype_built"]
+    else:
+        built = np.empty(n, dtype=np.int32)
+        built[order] = arrays["neighbours._ptype_sorted"]
+    keys, values = wp.zeros(n, dtype=wp.int32, device=device), wp.zeros(n, dtype=wp.int32, device=device)
+    x_dev = wp.array(x_build, dtype=vec, device=device)
+    wp.launch(nl._passes.cell_keys, dim=n, inputs=[nl.grid, x_dev, wp.array(built, dtype=wp.int32, device=device),
+                                                   keys, values], device=device)
+    key = keys.numpy()[order]
+    step = np.diff(key)
+    if (step < 0).any() or ((step == 0) & (np.diff(order) < 0)).any():
+        return ("neighbours._order is not the cell sort of the build positions (neighbours._x_build): the "
+                "lists it rebuilds are not the run's")
+    ncells = len(arrays["neighbours._start"])
+    start, end = np.zeros(ncells, dtype=np.int32), np.zeros(ncells, dtype=np.int32)
+    inside = key < ncells
+    cells, first = np.unique(key[inside], return_index=True)
+    start[cells] = first
+    end[cells] = np.append(first[1:], inside.sum())
+    if not (np.array_equal(start, arrays["neighbours._start"]) and np.array_equal(end, arrays["neighbours._end"])):
+        return "neighbours._start and _end are not the cell ranges of its sort"
+    if int(arrays["neighbours.stale"][0]) == 0:  # fresh lists: nobody has moved half the skin since
+        held = arrays["solver.ptype"] != VACANT
+        d = (arrays["solver.pos"] - x_build)[held].astype(np.float64)
+        g = nl.grid
+        for ax in range(3):
+            if g.periodic[ax]:
+                d[:, ax] -= float(g.length[ax]) * np.round(d[:, ax] / float(g.length[ax]))
+        far = np.linalg.norm(d, axis=1).max(initial=0.0)
+        if far > float(g.half_skin) * (1.0 + 1.0e-4):
+            return (f"a particle stands {far:.3g} m from its build position (neighbours._x_build), past the "
+                    f"half skin {float(g.half_skin):.3g} m its lists allow: the positions are not those its "
+                    "lists were built on")
+    if nl.cells:
+        return ""
+    # each fluid particle's list length, found again from the build positions in the state's sort,
+    # in lists as wide as the state's (put() widens the solver's to them)
+    stored = arrays["neighbours.count"]
+    sorted_pos = wp.array(x_build[order], dtype=vec, device=device)
+    found = wp.zeros(n, dtype=wp.int32, device=device)
+    lists = wp.zeros((n, width), dtype=wp.int32, device=device)
+    grid = type(nl.grid)()
+    for name in nl.grid._cls.vars:
+        setattr(grid, name, getattr(nl.grid, name))
+    grid.max_neighbours = width
+    fail = wp.array(np.full(1, NO_FAILURE, dtype=np.int32), dtype=wp.int32, device=device)
+    wp.launch(nl._passes.neighbour_list, dim=n,
+              inputs=[grid, sorted_pos, wp.array(arrays["neighbours._ptype_sorted"], dtype=wp.int32, device=device),
+                      wp.array(arrays["neighbours._hsml_sorted"], dtype=nl._hsml_sorted.dtype, device=device),
+                      wp.array(order, dtype=wp.int32, device=device),
+                      wp.array(arrays["neighbours._start"], dtype=wp.int32, device=device),
+                      wp.array(arrays["neighbours._end"], dtype=wp.int32, device=device), lists, found,
+                      wp.array(arrays["solver._needs_list"], dtype=wp.int32, device=device),
+                      wp.array(arrays["solver.ghost"], dtype=vec, device=device), wp.zeros_like(x_dev),
+                      wp.zeros(1, dtype=wp.int32, device=device), fail, 0, wp.ones(1, dtype=wp.int32, device=device),
+                      0, 1], device=device)
+    found = found.numpy()
+    fluid = built == FLUID
+    # a particle made since the build (a refinement level's) has no list yet: only a run with levels
+    # holds one, and it reads 0 where a build would find some
+    wrong = fluid & (stored != found) & ~((stored == 0) & (len(solver._level_h) > 1))
+    if wrong.any():
+        i = int(np.flatnonzero(wrong)[0])
+        return (f"neighbours.count is not what its build positions give: particle {i} lists {int(stored[i])} "
+                f"neighbours where a build finds {int(found[i])}")
     return ""
 
 
