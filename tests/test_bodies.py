@@ -712,3 +712,21 @@ def test_a_moving_body_in_a_scene_with_an_origin_starts_where_it_was_built():
     solver = Solver(model.config, model.particles)
     paddle = model.particles.body == 0
     assert np.abs(solver.snapshot()["pos"][paddle] - model.particles.pos[paddle]).max() < 1e-6
+
+
+@pytest.mark.physics
+def test_a_scene_with_a_driven_body_changes_precision_in_one_process():
+    """Issue 66, item 6: a reset from float32 to float64 on a scene with a driven body was refused
+    with Warp's own text ("argument 'laws' expects an array with dtype=<Struct ...>"): the bodies'
+    structs were made once per precision and the kernels kept the first. Both ways now, each run
+    reaching its end time."""
+    from gpusph_ros.ros import node_params
+    from gpusph_ros.runner import Run
+
+    for precision in ("float32", "float64", "float32"):
+        values = {**node_params.DEFAULTS, "scene": "paddle_2d", "dx": 0.08, "end_time": 0.05,
+                  "precision": precision}
+        run = Run(*node_params.run_settings(values))
+        while not run.done:
+            run.step_output()
+        assert run.solver.time == pytest.approx(0.05) and run.model.config.precision == precision

@@ -30,12 +30,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from diagnostic_msgs.msg import DiagnosticArray
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import Header
-from std_srvs.srv import Trigger
+from std_srvs.srv import SetBool, Trigger
 
 from gpusph_ros.ros import node_params
 from gpusph_ros.runner import Run
@@ -174,13 +174,47 @@ def test_a_node_that_follows_a_clock_keeps_up_resets_when_it_goes_back_and_warns
     assert behind[0] < behind[1] < behind[2]
     assert log.read_text().count("behind the followed /clock (max_lag 0.05 s)") == 1
     assert int(_diagnostic(client, time.monotonic())["clock_lag_over"]) > 0
+    # issue 66, item 5: a stamp ROS would not read (nanosec 3,999,999,999 was taken as 4 s later) is
+    # refused and counted; the fluid past max_lag behind is a warning on /diagnostics, not OK
+    bad = Clock()
+    bad.clock.sec, bad.clock.nanosec = 401, 3_999_999_999
+    stand_in.pub.publish(bad)
+    time.sleep(1.0)
+    values = _diagnostic(client, time.monotonic())
+    assert int(values["clock_refused"]) == 1 and float(values["clock_followed"]) == pytest.approx(400.0)
+    status = client.received("/diagnostics")[-1].status[0]
+    assert status.level == DiagnosticStatus.WARN and "past max_lag" in status.message
+    # a clock going back and forth 20 times in a second resets the run once (at most one reset every
+    # CLOCK_RESET_INTERVAL), the rest counted
+    resets = log.read_text().count("resetting the run")
+    for k in range(20):
+        stand_in.pub.publish(_stamp(0.001 * (k % 2)))
+        time.sleep(0.05)
+    time.sleep(1.0)
+    assert log.read_text().count("resetting the run") == resets + 1
+    assert int(_diagnostic(client, time.monotonic())["clock_resets_deferred"]) >= 5
+    # issue 66, item 4: a ~/step while the clock stands before the next output answers at once,
+    # saying so (it held the call 30 s, then said "still running" while nothing ran)
+    assert client.call("set_paused", SetBool, data=True).success
+    start = time.monotonic()
+    answer = client.call("step", Trigger)
+    assert time.monotonic() - start < 5.0
+    assert not answer.success and answer.message.startswith("waiting for /clock"), answer.message
 
 
 def test_a_node_without_a_clock_runs_and_publishes_none(tmp_path):
-    with _node(225 + os.getpid() % 8, tmp_path / "sim_node.log", "clock:=none", "end_time:=0.2") as (_, client):
+    log = tmp_path / "sim_node.log"
+    # issue 66, item 7: a run setting the node did not declare (neighbour_search) and a misspelt
+    # name were ignored without a word; the first is taken now, the second reported
+    with _node(225 + os.getpid() % 8, log, "clock:=none", "end_time:=0.2", "neighbour_search:=cells",
+               "neighbour_serch:=lists") as (_, client):
         client.wait_for("/diagnostics", lambda m: bool(m) and m[-1].status[0].message.startswith("finished"),
                         timeout=120.0)
         assert client.received("/clock") == [] and client.node.get_publishers_info_by_topic("/clock") == []
+        assert client.get("neighbour_search") == {"neighbour_search": "cells"}
+        status = client.received("/diagnostics")[-1].status[0]
+        assert status.level == DiagnosticStatus.WARN and "not taken at start-up: neighbour_serch" in status.message
+    assert "neighbour_serch: not a parameter of this node (did you mean neighbour_search?)" in log.read_text()
 
 
 def test_a_lockstep_master_steps_the_fluid_as_a_free_run_with_the_same_stops(tmp_path):

@@ -19,12 +19,15 @@ def _values(**changes):
 
 
 def test_the_issue_list_of_parameters_is_declared():
+    from gpusph_ros.scenes.settings import RUN_KEYS
+
     names = {p.name for p in PARAMS}
     assert names == {"scene", "dx", "kernel", "viscosity", "sps", "boundary", "density_diffusion", "precision",
                      "device", "cfl", "c0", "end_time", "output_rate", "real_time_factor", "publish_particles",
                      "particle_fields", "record_dir", "frame_id", "autostart", "model", "crop", "wall_planes",
                      "max_excluded_fraction", "max_left_fraction", "mdbc_slip", "visco_bound_factor", "compression",
-                     "stamps", "state_file", "clock", "max_lag", "wrench_rate"}
+                     "stamps", "state_file", "clock", "max_lag", "wrench_rate"} | (
+        set(RUN_KEYS) - set(node_params.NOT_NODE_SETTINGS))  # every run setting gpusph-run takes (issue 66)
     for p in PARAMS:
         assert p.description and p.applies in (node_params.RESET, node_params.LIVE, node_params.RECORDING,
                                                node_params.STARTUP, node_params.SERVICE)

@@ -16,7 +16,7 @@ from ..scenes import resources
 from ..scenes.build import fluid_boxes, priced
 from ..scenes.reduce import MODELS
 from ..scenes.schema import FRAME_ID, MAX_FRAME_ID, MAX_PATH, builtin_names, load_scene
-from ..scenes.settings import COMPRESSIONS, STAMPS, resolve
+from ..scenes.settings import COMPRESSIONS, NUMERIC_FIELDS, STAMPS, resolve
 from ..sph.config import LIVE, RESET, ConfigError, SolverConfig, shown
 from ..sph.device import AUTO
 
@@ -40,18 +40,28 @@ class Param:
     hi: float = None
 
 
+HAND_DECLARED = ("viscosity",)  # a solver setting whose parameter PARAMS declares itself (sps beside it)
+# the run settings of gpusph-run that the node takes another way: the clouds follow output_rate and
+# publish_particles; a recorded node writes no checkpoints (~/save_state does)
+NOT_NODE_SETTINGS = {"particle_rate": "the node's clouds follow output_rate (publish_particles turns them off)",
+                     "checkpoint_interval": "the node writes no checkpoints of its own; ~/save_state does"}
+
+
 # the node's own defaults where they differ from the solver's: its default run is DamBreak 1 at
 # 3 cm, on the CPU whatever $GPUSPH_ROS_DEVICE says
 NODE_DEFAULTS = {"dx": 0.03, "device": "cpu"}
 
 
 def _solver_params() -> tuple:
-    """A parameter for each solver setting marked for the node (``sph.config.setting``): its meaning,
-    choices or range and when a change applies come from the setting itself."""
+    """A parameter for each solver setting a run may set (``--set``: the numerics and the health
+    limits, ``scenes.settings.NUMERIC_FIELDS``) but those declared by hand below (viscosity): its
+    meaning, choices or range and when a change applies come from the setting itself. A setting
+    the node does not declare is ignored by rclpy without a word (`-p neighbour_search:=cells` ran
+    with lists), so every one is declared."""
     out = []
     for f in dataclasses.fields(SolverConfig):
         m = f.metadata
-        if m.get("node"):
+        if m.get("node") or (f.name in NUMERIC_FIELDS and f.name not in HAND_DECLARED):
             default = NODE_DEFAULTS.get(f.name, f.default)
             out.append(Param(f.name, default, m["doc"], m["applies"], choices=tuple(m["choices"] or ()), lo=m["lo"],
                              hi=m["hi"]))
@@ -75,6 +85,8 @@ PARAMS = (
           "the narrow obstacles, for the probes upstream of them until their reflection returns)", RESET,
           choices=MODELS),
     Param("crop", False, "cut the tank to what a front moving at 2 sqrt(g H) reaches by the end time", RESET),
+    Param("slab_width", 0.0, "with model slab, the slab's width across y [m]; 0 = the narrowest periodic slab",
+          RESET, lo=0.0, hi=1.0e3),
     Param("wall_planes", False, "every wall of boundary particles as a particle-less plane", RESET),
     Param("end_time", 0.0, "simulated time the run stops at [s]; 0 = the scene's own", LIVE, lo=0.0, hi=1.0e5),
     Param("output_rate", 0.0, "outputs per simulated second [Hz]: /clock, probes, wrenches and particles; "
@@ -118,6 +130,22 @@ LIVE_SETTINGS = {**{p.name: "solver" for p in SOLVER_PARAMS if p.applies == LIVE
                  "end_time": "output", "output_rate": "output", "particle_rate": "output", "particle_fields": "cloud",
                  "frame_id": "cloud", "real_time_factor": "pace", "max_lag": "pace"}
 _SETTINGS_OF = {"sps": ("viscosity",), "publish_particles": ("particle_rate",)}
+
+
+def undeclared(names) -> list:
+    """A line for each of ``names`` (parameters given at start-up) the node does not take: a run
+    setting it takes another way, or an unknown name with the closest it declares."""
+    import difflib
+
+    out = []
+    for name in sorted(set(names) - set(BY_NAME)):
+        if name in NOT_NODE_SETTINGS:
+            out.append(f"{name}: a run setting of gpusph-run that the node does not take ({NOT_NODE_SETTINGS[name]})")
+            continue
+        close = difflib.get_close_matches(name, list(BY_NAME), n=1)
+        out.append(f"{name}: not a parameter of this node" + (f" (did you mean {close[0]}?)" if close else "")
+                   + "; it is ignored")
+    return out
 
 
 def applies_text(name: str) -> str:
@@ -208,7 +236,7 @@ def run_settings(values: dict):
     output |= {k: values[k] for k in ("compression", "stamps", "wrench_rate")}
     numerics = {p.name: values[p.name] for p in SOLVER_PARAMS}
     numerics["viscosity"] = "sps" if values["sps"] else values["viscosity"]
-    reduction = {k: values[k] for k in ("model", "crop", "wall_planes")}
+    reduction = {k: values[k] for k in ("model", "slab_width", "crop", "wall_planes")}
     # the node's clouds follow output_rate
     config = resolve(scene, **numerics, **output, **reduction, particle_rate=0.0)
     rate = config.output.output_rate if values["publish_particles"] else 0.0

@@ -363,6 +363,13 @@ class Session:
                 return False, "clock: lockstep moves the fluid only to the times sent on ~/advance_to"
             if self.active and not self.paused:
                 return False, "the solver is running; pause it first (~/set_paused true)"
+            aim = max(run.next_output, self._step_to + 1) / run.output.output_rate
+            if self.following and (self._limit is None or aim > self._limit + 1e-9):
+                # a stopped clock would hold the call for its whole wait and then say "still running"
+                # while nothing ran: answered at once, and nothing is asked of the solver
+                clock = "sent nothing yet" if self._limit is None else f"reads t = {self._limit:.4f} s"
+                return False, (f"waiting for /clock: the next output, t = {aim:.4f} s, is past the followed "
+                               f"clock, which {clock}; step again once it has passed it")
             # the output after those already asked for; run.next_output has already moved past
             # an output the solver thread is still publishing
             k = self._step_to = max(run.next_output, self._step_to + 1)

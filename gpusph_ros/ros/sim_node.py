@@ -28,6 +28,7 @@ the solver; after shut-down every service refuses, naming the state.
 """
 import collections
 import functools
+import math
 import os
 import sys
 import threading
@@ -61,6 +62,11 @@ from .node_params import PARAMS
 from .session import MAX_TARGETS, Session
 
 STEP_WAIT = 30.0  # [s] the longest ~/step waits for its output before it answers
+# [s] of wall time between two resets a followed /clock asks for by going back: two publishers that
+# disagree, or a clock going back and forth, reset the run at each message (45 resets and 59 bag
+# folders in 7 s); a clock that goes back sooner is counted and the reset waits for the next message
+# after the interval, so at most one run, and one bag, starts every CLOCK_RESET_INTERVAL
+CLOCK_RESET_INTERVAL = 5.0
 COMMAND_DEPTH = 10  # the commands a body's subscription holds until the commands thread takes them
 # ~/advance_to requests and ~/reached answers held for a slow reader (clock: lockstep): room for twice
 # the targets the session takes at once, so that a burst the session refuses in part is still read
@@ -133,6 +139,13 @@ class SimNode(LifecycleNode):
         super().__init__("sim_node", **kwargs)
         for p in PARAMS:
             self.declare_parameter(p.name, p.default, _descriptor(p))
+        # a -p the node declares no parameter for would be ignored without a word: said at start-up
+        # and on /diagnostics
+        self.unknown_parameters = node_params.undeclared(
+            name for name in self._parameter_overrides
+            if not self.has_parameter(name) and not name.startswith("qos_overrides."))
+        for line in self.unknown_parameters:
+            self.get_logger().error(f"parameter {line}")
         self.namespace = self.get_fully_qualified_name()
         self._fixed_pubs = {
             f"{self.namespace}/particles": self.create_publisher(
@@ -160,6 +173,7 @@ class SimNode(LifecycleNode):
         threading.Thread(target=self._spin_commands, daemon=True, name="commands").start()
         # the last unexpected error a callback caught, until the next build or a request that succeeds
         self.internal_error = ""
+        self.clock_refused = self.clock_resets_deferred = 0  # clock: follow
         self._logged = set()
         self._reset_lock = threading.Lock()
         self.add_on_set_parameters_callback(self._check_parameters)
@@ -175,6 +189,7 @@ class SimNode(LifecycleNode):
         if self.value("clock") == "follow":
             # on the commands' node: its one thread takes each tick in turn, off the services' threads
             self.session.following = True
+            self._clock_reset_at = -math.inf
             self._commands_node.create_subscription(Clock, "/clock", self._clock_tick, _qos(**CLOCK_QOS))
         # services run side by side (a waiting ~/step blocks no ~/set_paused) and apart from the
         # parameter services; the session serialises what must be serialised
@@ -611,15 +626,32 @@ class SimNode(LifecycleNode):
     @_quiet
     def _clock_tick(self, msg):
         """clock: follow: the fluid may advance to the followed clock's time; a clock that goes back
-        (a simulator's reset) resets the run, which then follows the clock from there."""
-        t = msg.clock.sec + msg.clock.nanosec * 1e-9
+        (a simulator's reset) resets the run, which then follows the clock from there, at most once
+        every CLOCK_RESET_INTERVAL. A stamp ROS would not read (nanosec not below 10^9, a time before
+        0) is refused and counted (/diagnostics: clock_refused)."""
+        sec, nanosec = msg.clock.sec, msg.clock.nanosec
+        if not (0 <= nanosec < 1_000_000_000) or sec < 0:
+            self.clock_refused += 1
+            self.get_logger().error(f"/clock: sec {sec}, nanosec {nanosec} is not a time (nanosec must be below "
+                                    "10^9, the time at least 0): refused", throttle_duration_sec=1.0)
+            return
+        t = sec + nanosec * 1e-9
         if self.session.clock_to(t):
             return
+        now = time.monotonic()
+        if now - self._clock_reset_at < CLOCK_RESET_INTERVAL:
+            self.clock_resets_deferred += 1
+            self.get_logger().warning(f"the followed /clock went back to t = {t:.4f} s within "
+                                      f"{CLOCK_RESET_INTERVAL:g} s of the last reset it asked for: the reset waits "
+                                      "(two publishers on /clock?)", throttle_duration_sec=1.0)
+            return
+        self._clock_reset_at = now
         self.get_logger().warning(f"the followed /clock went back to t = {t:.4f} s: resetting the run")
         answer = self._reset(Trigger.Request(), Trigger.Response())
         if not answer.success:
             self.get_logger().error(f"the reset the clock asked for failed: {answer.message}")
         self.session.restart_clock(t)
+        self._clock_reset_at = time.monotonic()  # the interval counts from the new run (a build takes time)
 
     @_quiet
     def _advance_to(self, msg, info):
@@ -668,6 +700,15 @@ class SimNode(LifecycleNode):
         if "clock_lag" in stats:
             message += (f"; following /clock (t = {stats['clock_followed']:.3f} s): the fluid "
                         f"{stats['clock_lag']:.3f} s behind, at worst {stats['clock_lag_worst']:.3f} s")
+            stats.update(clock_refused=self.clock_refused, clock_resets_deferred=self.clock_resets_deferred)
+            if stats["clock_lag"] > self.session.max_lag and state not in ("finished", "failed"):
+                level = max(level, DiagnosticStatus.WARN)
+                message += f", past max_lag {self.session.max_lag:g} s"
+        if self.unknown_parameters:
+            level = max(level, DiagnosticStatus.WARN)
+            names = ", ".join(u.split(":")[0] for u in self.unknown_parameters)
+            message += f"; parameters not taken at start-up: {names}"
+            stats["unknown_parameters"] = "; ".join(self.unknown_parameters)
         if self.internal_error:
             level, message = DiagnosticStatus.ERROR, f"{message}; {self.internal_error}"
             stats["internal_error"] = self.internal_error

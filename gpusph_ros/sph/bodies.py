@@ -258,67 +258,73 @@ def quaternion_matrix(q) -> np.ndarray:
                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
 
+# A body's law, a floating body's state and a body's pose, in float64 whatever the fluid's precision:
+# one struct of each for every build, since Warp keys a kernel by its name and module, and a second
+# build's struct (float64 after float32) was refused by the first build's kernels ("argument 'laws'
+# expects an array with dtype=<Struct ...>"), so a reset could not change the precision of a scene
+# with a body.
+@wp.struct
+class Law:
+    kind: int  # FIXED, SINUSOID, MOVE or FLOATING
+    centre: wp.vec3d  # c0
+    amplitude: wp.vec3d
+    omega: wp.float64
+    phase: wp.float64
+    angle: wp.float64
+    axis: wp.vec3d
+    start: wp.float64
+    duration: wp.float64
+    ramp: wp.float64
+    mass: wp.float64  # floating: M, the body frame's inertia, the free axes, the release time
+    inertia: wp.mat33d
+    inv_inertia: wp.mat33d
+    translate: wp.vec3d  # 1 where free, 0 where held
+    rotate: wp.vec3d
+    release: wp.float64
+    corner_lo: wp.vec3d  # floating: its box's corners less c0
+    corner_hi: wp.vec3d
+    radius: wp.float64  # floating and round: its radius, axis (body frame) and half length
+    round_axis: wp.vec3d
+    half_length: wp.float64
+    ext_force: wp.vec3d  # floating: an external force and torque about its centre of mass (world)
+    ext_torque: wp.vec3d
+    first: int  # series: its rows in the series table
+    count: int
+    t0: wp.float64  # driven: the segment's start, pose, velocities and constant accelerations
+    x0: wp.vec3d
+    q0: wp.quatd
+    v0: wp.vec3d
+    w0: wp.vec3d
+    lin_acc: wp.vec3d
+    ang_acc: wp.vec3d
+
+@wp.struct
+class Rigid:
+    """A floating body's state: centre of mass, its velocity, rotation, angular momentum (world),
+    and the sum of the contacts' pushes at its stage (zero when it touched nothing)."""
+
+    x: wp.vec3d
+    v: wp.vec3d
+    q: wp.quatd
+    ang: wp.vec3d
+    touch: wp.vec3d
+
+@wp.struct
+class Pose:
+    """Where a body stands at one stage and how it moves: X, q, V, omega, A, alpha."""
+
+    x: wp.vec3d
+    q: wp.quatd
+    v: wp.vec3d
+    w: wp.vec3d
+    a: wp.vec3d
+    alpha: wp.vec3d
+
+
 @functools.lru_cache(maxsize=None)
 def build(scalar):
     vec = wp.types.vector(3, scalar)
     healthy = health.build(scalar).healthy
-
-    @wp.struct
-    class Law:
-        kind: int  # FIXED, SINUSOID, MOVE or FLOATING
-        centre: wp.vec3d  # c0
-        amplitude: wp.vec3d
-        omega: wp.float64
-        phase: wp.float64
-        angle: wp.float64
-        axis: wp.vec3d
-        start: wp.float64
-        duration: wp.float64
-        ramp: wp.float64
-        mass: wp.float64  # floating: M, the body frame's inertia, the free axes, the release time
-        inertia: wp.mat33d
-        inv_inertia: wp.mat33d
-        translate: wp.vec3d  # 1 where free, 0 where held
-        rotate: wp.vec3d
-        release: wp.float64
-        corner_lo: wp.vec3d  # floating: its box's corners less c0
-        corner_hi: wp.vec3d
-        radius: wp.float64  # floating and round: its radius, axis (body frame) and half length
-        round_axis: wp.vec3d
-        half_length: wp.float64
-        ext_force: wp.vec3d  # floating: an external force and torque about its centre of mass (world)
-        ext_torque: wp.vec3d
-        first: int  # series: its rows in the series table
-        count: int
-        t0: wp.float64  # driven: the segment's start, pose, velocities and constant accelerations
-        x0: wp.vec3d
-        q0: wp.quatd
-        v0: wp.vec3d
-        w0: wp.vec3d
-        lin_acc: wp.vec3d
-        ang_acc: wp.vec3d
-
-    @wp.struct
-    class Rigid:
-        """A floating body's state: centre of mass, its velocity, rotation, angular momentum (world),
-        and the sum of the contacts' pushes at its stage (zero when it touched nothing)."""
-
-        x: wp.vec3d
-        v: wp.vec3d
-        q: wp.quatd
-        ang: wp.vec3d
-        touch: wp.vec3d
-
-    @wp.struct
-    class Pose:
-        """Where a body stands at one stage and how it moves: X, q, V, omega, A, alpha."""
-
-        x: wp.vec3d
-        q: wp.quatd
-        v: wp.vec3d
-        w: wp.vec3d
-        a: wp.vec3d
-        alpha: wp.vec3d
 
     @wp.func
     def profile(law: Law, t: wp.float64) -> wp.vec3d:
