@@ -20,9 +20,17 @@ within 2 s and every bag reads whole, else 1.
 
 ``--clock follow`` starts the node with ``clock: follow`` and publishes its /clock from the soak, in
 real time at 200 Hz (a robot simulator's bridge), going back to 0 now and then (a simulator's reset)
-as one more kind of call.
+as one more kind of call. ``--clock lockstep`` starts it with ``clock: lockstep``, and a burst of
+1 to 1,500 targets on ~/advance_to, 1 ms apart past the last sent, is one more kind of call; at the
+end the node is let run until every target is answered on ~/reached (reached or refused) or 60 s
+pass, and the summary counts the targets never answered.
 
-    python bench/soak.py [--minutes 30] [--out docs/results/soak] [--seed 1] [--clock follow]
+Issue 66's race is one more kind of call in every mode: ~/save_state, ~/reset with the scene
+switched to the other of two (SCENE and SCENE_B, whose bodies differ) and ~/record on, sent at
+once from three threads. Every bag is then checked to hold one run: the topics of its own scene
+only (named by its folder) and one /clock message per time, in order.
+
+    python bench/soak.py [--minutes 30] [--out docs/results/soak] [--seed 1] [--clock follow|lockstep]
 """
 import argparse
 import csv
@@ -53,7 +61,19 @@ obstacles:
      motion: {type: driven, max_speed: 0.3, max_acceleration: 3.0, timeout: 0.5}}
   - {name: box, lo: [0.6, 0.25], hi: [0.8, 0.35], displaces_fluid: true, floating: {density: 500}}
 """
+# the other scene of the race: the same tank with one floating body of another name, so that a bag
+# holding the other run's messages shows by its topics
+SCENE_B = """name: soak_float
+dim: 2
+tank: [1.2, 0.6]
+fluid:
+  - {name: water, lo: [0.1, 0.0], hi: [1.2, 0.3]}
+obstacles:
+  - {name: float, lo: [0.5, 0.25], hi: [0.7, 0.35], displaces_fluid: true, floating: {density: 500}}
+"""
+FOREIGN = {"soak_bodies": ("/bodies/float/",), "soak_float": ("/bodies/paddle/", "/bodies/box/")}
 BURST = 200  # commands published back to back
+MAX_TARGETS = 1500  # the largest burst of lockstep targets
 
 
 class _Payload:
@@ -74,8 +94,9 @@ def _proc(pid: int) -> dict:
 
 
 def _check_closed_bags(folder: Path, keep_open: bool) -> list:
-    """(bag, messages, whole) for each bag under ``folder`` whose file is finished (all of them when
-    not ``keep_open``); each is read with rosbags, then deleted."""
+    """(bag, messages, whole, one run) for each bag under ``folder`` whose file is finished (all of
+    them when not ``keep_open``); each is read with rosbags, then deleted. One run: no topic of the
+    other scene (FOREIGN, by the folder's scene name) and /clock's stamps strictly increasing."""
     from rosbags.highlevel import AnyReader
 
     from gpusph_ros.output.recording import bag_files, is_whole
@@ -85,14 +106,24 @@ def _check_closed_bags(folder: Path, keep_open: bool) -> list:
         files = bag_files(bag)
         if not files or (keep_open and not all(is_whole(f) for f in files)):
             continue
+        foreign = next((v for k, v in FOREIGN.items() if bag.name.startswith(k + "_")), ())
+        one_run = True
         try:
             with AnyReader([bag]) as reader:
-                count = sum(1 for _ in reader.messages())
+                count, clock = 0, []
+                for connection, stamp, _ in reader.messages():
+                    count += 1
+                    one_run &= not any(f in connection.topic for f in foreign)
+                    if connection.topic == "/clock":
+                        clock.append(stamp)
                 whole = count == reader.message_count and all(is_whole(f) for f in files)
+                one_run &= all(b > a for a, b in zip(clock, clock[1:]))
         except Exception as err:  # a bag that does not read is the finding
             print(f"  bag {bag.name} does not read: {type(err).__name__}: {err}", flush=True)
             count, whole = 0, False
-        out.append((bag.name, count, whole))
+        if not one_run:
+            print(f"  bag {bag.name} holds another run's messages", flush=True)
+        out.append((bag.name, count, whole, one_run))
         shutil.rmtree(bag)
     return out
 
@@ -112,8 +143,9 @@ def soak(minutes: float, out: Path, seed: int, period: float, sample: float, clo
     bags.mkdir()
     fifo, poison, marker = work / "state.fifo", work / "poison.npz", work / "ran"
     os.mkfifo(fifo)
-    scene = work / "soak_bodies.yaml"
+    scene, scene_b = work / "soak_bodies.yaml", work / "soak_float.yaml"
     scene.write_text(SCENE)
+    scene_b.write_text(SCENE_B)
     poison.write_bytes(pickle.dumps({"scene": _Payload(marker)}))
     domain = 200 + os.getpid() % 30
     env = {**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
@@ -167,6 +199,53 @@ def soak(minutes: float, out: Path, seed: int, period: float, sample: float, clo
     def clock_back():
         ticking["origin"] = time.monotonic()
 
+    lockstep = {"sent": 0, "answered": 0, "refused": 0, "last_ns": 0}
+    if clock == "lockstep":
+        from rclpy.qos import QoSProfile, ReliabilityPolicy
+        from std_msgs.msg import Header
+
+        qos = QoSProfile(depth=2000, reliability=ReliabilityPolicy.RELIABLE)
+        targets = client.node.create_publisher(Header, "/sim_node/advance_to", qos)
+
+        def reached(msg):
+            lockstep["answered"] += 1
+            lockstep["refused"] += msg.frame_id == "refused"
+        client.node.create_subscription(Header, "/sim_node/reached", reached, qos)
+
+    def burst():
+        """1 to MAX_TARGETS lockstep targets, 1 ms apart past the last sent."""
+        for _ in range(rng.randint(1, MAX_TARGETS)):
+            lockstep["last_ns"] += 1_000_000
+            msg = Header()
+            msg.stamp.sec, msg.stamp.nanosec = divmod(lockstep["last_ns"], 1_000_000_000)
+            targets.publish(msg)
+            lockstep["sent"] += 1
+
+    race_calls = []  # (kind, latency) of each call of a race, reported with the others
+
+    def race():
+        """~/save_state, ~/reset to the other scene and ~/record on, at once: each answers in time."""
+        current = client.get("scene")["scene"]
+        other = str(scene_b if current == str(scene) else scene)
+        client.set(scene=other)
+        failures = []
+
+        def call(name, srv, **fields):
+            t0 = time.monotonic()
+            try:
+                client.call(name, srv, timeout=ANSWER, **fields)
+            except TimeoutError as err:
+                failures.append(err)
+            race_calls.append((f"race: {name}", time.monotonic() - t0))
+        threads = [threading.Thread(target=call, args=args, kwargs=kw) for args, kw in (
+            (("save_state", Trigger), {}), (("reset", Trigger), {}), (("record", SetBool), {"data": True}))]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        if failures:
+            raise failures[0]
+
     def lifecycle(label):
         ids = {"deactivate": Transition.TRANSITION_DEACTIVATE, "activate": Transition.TRANSITION_ACTIVATE}
         return client.call("change_state", ChangeState, timeout=ANSWER, transition=Transition(id=ids[label]))
@@ -198,7 +277,10 @@ def soak(minutes: float, out: Path, seed: int, period: float, sample: float, clo
         "load_state pickle": load(poison),
         "lifecycle": lambda: lifecycle(rng.choice(["deactivate", "activate"])),
         "body commands": commands,
+        "save/reset/record race": race,
     }
+    if clock == "lockstep":
+        kinds["lockstep burst"] = burst
     if clock == "follow":
         kinds["clock back to 0"] = clock_back
         threading.Thread(target=tick, daemon=True).start()
@@ -233,10 +315,22 @@ def soak(minutes: float, out: Path, seed: int, period: float, sample: float, clo
                 answered = True
             except TimeoutError:
                 answered = False
-            calls.append({"minute": (t0 - start) / 60.0, "kind": kind, "latency_s": time.monotonic() - t0,
-                          "answered": answered})
+            if kind != "save/reset/record race":  # its calls are counted one by one
+                calls.append({"minute": (t0 - start) / 60.0, "kind": kind, "latency_s": time.monotonic() - t0,
+                              "answered": answered})
+            while race_calls:  # the race's own calls, each against the same bound
+                name, latency = race_calls.pop()
+                calls.append({"minute": (t0 - start) / 60.0, "kind": name, "latency_s": latency,
+                              "answered": latency <= ANSWER})
             time.sleep(rng.uniform(0.0, 2.0 * period))
         alive = node.poll() is None
+        if alive and clock == "lockstep":  # let the fluid reach every target sent
+            lifecycle("activate")  # refused where it is active already
+            client.call("set_paused", SetBool, timeout=10.0, data=False)
+            client.set(real_time_factor=0.0)
+            wait = time.monotonic() + 60.0
+            while lockstep["answered"] < lockstep["sent"] and time.monotonic() < wait:
+                time.sleep(0.5)
         if alive:
             client.call("record", SetBool, timeout=10.0, data=False)
     finally:
@@ -250,10 +344,10 @@ def soak(minutes: float, out: Path, seed: int, period: float, sample: float, clo
                 node.kill()
         log.close()
     read += _check_closed_bags(bags, keep_open=False)
-    return _report(out, minutes, samples, calls, read, alive, marker.exists(), work, clock)
+    return _report(out, minutes, samples, calls, read, alive, marker.exists(), work, clock, lockstep)
 
 
-def _report(out: Path, minutes, samples, calls, read, alive, ran, work, clock) -> int:
+def _report(out: Path, minutes, samples, calls, read, alive, ran, work, clock, lockstep) -> int:
     out.mkdir(parents=True, exist_ok=True)
     for name, rows in (("soak.csv", samples), ("soak_calls.csv", calls)):
         with open(out / name, "w", newline="") as f:
@@ -269,6 +363,8 @@ def _report(out: Path, minutes, samples, calls, read, alive, ran, work, clock) -
     unanswered = [c for c in calls if not c["answered"]]
     slow = [c for c in calls if c["latency_s"] > ANSWER]
     broken = [b for b in read if not b[2]]
+    mixed = [b for b in read if not b[3]]
+    lost = lockstep["sent"] - lockstep["answered"]
     lines = [f"# sim_node soak: {minutes:g} minutes", "",
              "`python bench/soak.py --minutes %g --clock %s` (a 2D tank with a driven paddle and a floating box at "
              "3 cm, real_time_factor 1, recording on and off at random; one client, a call about every 0.5 s, body "
@@ -283,7 +379,11 @@ def _report(out: Path, minutes, samples, calls, read, alive, ran, work, clock) -
              f"- open files {min(s['fds'] for s in samples)}-{max(s['fds'] for s in samples)}, threads "
              f"{min(s['threads'] for s in samples)}-{max(s['threads'] for s in samples)}",
              f"- bags read with rosbags: {len(read)}, {sum(b[1] for b in read):,} messages; not whole or not "
-             f"readable: {len(broken)}", "", "| call | n | median ms | p99 ms | worst ms |",
+             f"readable: {len(broken)}; holding another run's messages (topics of the other scene, or /clock "
+             f"stamps not strictly increasing): {len(mixed)}",
+             *([f"- lockstep targets sent: {lockstep['sent']:,}; answered {lockstep['answered']:,} (refused "
+                f"{lockstep['refused']:,}); never answered: {lost:,}"] if clock == "lockstep" else []),
+             "", "| call | n | median ms | p99 ms | worst ms |",
              "| --- | --- | --- | --- | --- |"]
     for kind in sorted({c["kind"] for c in calls}):
         ms = sorted(1e3 * c["latency_s"] for c in calls if c["kind"] == kind)
@@ -291,7 +391,7 @@ def _report(out: Path, minutes, samples, calls, read, alive, ran, work, clock) -
         lines.append(f"| {kind} | {len(ms)} | {statistics.median(ms):.0f} | {p99:.0f} | {ms[-1]:.0f} |")
     (out / "soak.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
-    ok = alive and not ran and not unanswered and not slow and not broken and slope < 1.0
+    ok = alive and not ran and not unanswered and not slow and not broken and not mixed and not lost and slope < 1.0
     return 0 if ok else 1
 
 
@@ -302,8 +402,9 @@ def main():
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--period", type=float, default=0.5, help="mean seconds between two calls")
     parser.add_argument("--sample", type=float, default=10.0, help="seconds between two samples of the node")
-    parser.add_argument("--clock", choices=["publish", "follow"], default="publish",
-                        help="follow: the node follows a /clock the soak publishes in real time")
+    parser.add_argument("--clock", choices=["publish", "follow", "lockstep"], default="publish",
+                        help="follow: the node follows a /clock the soak publishes in real time; lockstep: the "
+                             "soak sends bursts of targets on ~/advance_to")
     args = parser.parse_args()
     sys.exit(soak(args.minutes, args.out, args.seed, args.period, args.sample, args.clock))
 
