@@ -43,3 +43,22 @@ def test_a_run_on_auto_steps_on_the_chosen_device_and_says_why():
 def test_the_node_takes_auto_and_refuses_a_device_it_lacks():
     assert check({**DEFAULTS, "device": AUTO}, ["device"]) is None
     assert "device: 'cuda:99' is not available here" in check({**DEFAULTS, "device": "cuda:99"}, ["device"])
+
+
+def test_a_cuda_device_this_warps_nvrtc_cannot_build_for_is_refused_by_name(monkeypatch):
+    """Issue 67: a GPU older than the oldest architecture this Warp's NVRTC builds for (sm_75 with
+    Warp 1.19; sm_70 is refused by it) is refused at the start, naming the device and both
+    capabilities, not left to fail at its first kernel's build."""
+    from gpusph_ros.sph.config import ConfigError, check_device
+    from gpusph_ros.sph.cuda_build import oldest_arch
+
+    oldest = oldest_arch()
+    assert oldest >= 60
+    gpus = {"cuda:0": SimpleNamespace(alias="cuda:0", is_cuda=True, arch=oldest - 5, name="Tesla V100"),
+            "cuda:1": SimpleNamespace(alias="cuda:1", is_cuda=True, arch=oldest, name="a newer GPU")}
+    monkeypatch.setattr(wp, "get_devices", lambda: [SimpleNamespace(alias="cpu", is_cuda=False), *gpus.values()])
+    monkeypatch.setattr(wp, "get_device", lambda name: gpus[name])
+    with pytest.raises(ConfigError, match=rf"capability {oldest // 10}\.{oldest % 10} or later.*cuda:0 \(Tesla "
+                                          rf"V100\) is {(oldest - 5) // 10}\.{(oldest - 5) % 10}"):
+        check_device("cuda:0")
+    check_device("cuda:1")

@@ -72,10 +72,16 @@ def check_device(device):
     if device not in names:
         raise ConfigError("device", device, "a Warp device of this machine: " + ", ".join(names))
     found = wp.get_device(device)
-    if found.is_cuda and found.arch < 60:
-        # the atomic minima and maxima of float64 (health.census) need sm_60's native float64 atomics
-        raise ConfigError("device", device, f"a CUDA device of compute capability 6.0 or later, got "
-                                            f"{found.arch // 10}.{found.arch % 10}")
+    if found.is_cuda:
+        from .cuda_build import oldest_arch
+
+        # what this Warp's NVRTC cannot build for fails at the first kernel's load, not here; the
+        # atomic minima and maxima of float64 (health.census) need sm_60 besides
+        oldest = max(60, oldest_arch())
+        if found.arch < oldest:
+            raise ConfigError("device", device, f"a CUDA device of compute capability {oldest // 10}.{oldest % 10} "
+                                                f"or later, the oldest this Warp's NVRTC builds for; {device} "
+                                                f"({found.name}) is {found.arch // 10}.{found.arch % 10}")
 
 
 @dataclass
