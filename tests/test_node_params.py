@@ -33,6 +33,19 @@ def test_the_issue_list_of_parameters_is_declared():
                                                node_params.STARTUP, node_params.SERVICE)
 
 
+def test_a_setting_declared_for_completeness_leaves_the_scenes_own_at_its_default(tmp_path):
+    """Issue 66, item 7 declared every run setting; one at its default must not override the
+    scene's run: section (a sinking column's energy_growth_ratio: 0 became 0.05 and failed the run),
+    and set off its default it does."""
+    scene = tmp_path / "s.yaml"
+    scene.write_text("name: s\ndim: 2\ntank: [0.4, 0.3]\nfluid:\n  - {name: w, lo: [0, 0], hi: [0.1, 0.1]}\n"
+                     "run: {energy_growth_ratio: 0.0, alpha: 0.05}\n")
+    config = run_settings(_values(scene=str(scene)))[1].solver
+    assert (config.energy_growth_ratio, config.alpha) == (0.0, 0.05)
+    config = run_settings(_values(scene=str(scene), energy_growth_ratio=0.2, alpha=0.3))[1].solver
+    assert (config.energy_growth_ratio, config.alpha) == (0.2, 0.3)
+
+
 def test_defaults_describe_a_run():
     assert check(_values()) is None
     scene, config = run_settings(_values())

@@ -52,6 +52,13 @@ NOT_NODE_SETTINGS = {"particle_rate": "the node's clouds follow output_rate (pub
 NODE_DEFAULTS = {"dx": 0.03, "device": "cpu"}
 
 
+def _scene_first() -> frozenset:
+    """The solver settings declared for the node whose default leaves the scene's run: value: all
+    but those the node declared first (``node=True`` in sph/config.py), which always override it."""
+    return frozenset(f.name for f in dataclasses.fields(SolverConfig)
+                     if f.name in NUMERIC_FIELDS and f.name not in HAND_DECLARED and not f.metadata.get("node"))
+
+
 def _solver_params() -> tuple:
     """A parameter for each solver setting a run may set (``--set``: the numerics and the health
     limits, ``scenes.settings.NUMERIC_FIELDS``) but those declared by hand below (viscosity): its
@@ -72,6 +79,7 @@ def _solver_params() -> tuple:
 # 1.1, where `clock:=off` is the boolean false
 CLOCKS = ("publish", "follow", "lockstep", "none")
 SOLVER_PARAMS = _solver_params()
+SCENE_FIRST = _scene_first()
 PARAMS = (
     Param("scene", "dambreak1_thesis", "built-in scene name (" + ", ".join(builtin_names()) + ") or a path "
           "to a scene YAML file", RESET),
@@ -234,9 +242,15 @@ def run_settings(values: dict):
     scene = load_scene(values["scene"])
     output = {k: values[k] for k in ("end_time", "output_rate") if values[k] > 0.0}
     output |= {k: values[k] for k in ("compression", "stamps", "wrench_rate")}
-    numerics = {p.name: values[p.name] for p in SOLVER_PARAMS}
+    # a setting the node took only to refuse nothing silently (SCENE_FIRST) is passed where set off
+    # its default: at the default, the scene's own run: section stands (a sinking column's
+    # energy_growth_ratio: 0 was overridden by 0.05 and the run failed its energy check)
+    numerics = {p.name: values[p.name] for p in SOLVER_PARAMS
+                if p.name not in SCENE_FIRST or values[p.name] != p.default}
     numerics["viscosity"] = "sps" if values["sps"] else values["viscosity"]
-    reduction = {k: values[k] for k in ("model", "slab_width", "crop", "wall_planes")}
+    reduction = {k: values[k] for k in ("model", "crop", "wall_planes")}
+    if values["slab_width"] != 0.0:  # as SCENE_FIRST: at 0, the scene's own
+        reduction["slab_width"] = values["slab_width"]
     # the node's clouds follow output_rate
     config = resolve(scene, **numerics, **output, **reduction, particle_rate=0.0)
     rate = config.output.output_rate if values["publish_particles"] else 0.0
