@@ -5,7 +5,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: run test lint unit bench gpu-check gpu-check-cpu clean
+.PHONY: run test lint unit bench cuda-check gpu-check gpu-check-cpu clean
 
 $(STAMP): requirements.txt setup.py package.xml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -42,6 +42,12 @@ unit: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python bench/solver.py
 	$(BIN)/python bench/node.py
+
+# every kernel of the package built for CUDA (sm_75, the oldest this Warp's NVRTC takes, and sm_90)
+# through Warp's NVRTC with no GPU, its PTX read for float atomic adds and float64 arithmetic
+# (bench/cuda_code.py; about 25 minutes on 2 cores, hence not in `make test`: docs/results/cuda_code.md)
+cuda-check: $(STAMP)
+	$(BIN)/python bench/cuda_code.py --out runs/cuda_code.csv
 
 # on a machine where Warp sees CUDA: tests, step counts, graph against eager, benchmarks and DamBreak 1
 # at 1 cm on cuda:0, one report (runs/gpu-check/report.md); elsewhere it says no CUDA device was found

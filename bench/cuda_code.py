@@ -12,6 +12,10 @@ the package was never loaded by RUNS, or a float atomic add stands in the packag
 
     python bench/cuda_code.py [--arch 75 --arch 90] [--out docs/results/cuda_code.csv] [--jobs 2]
 
+``--cache`` compiles to cubin into Warp's own kernel cache instead (for the GPU about to load them:
+`make gpu-check`'s first step, which fails fast on a build error and leaves the later steps' kernels
+built); ``--no-compile`` only checks that the runs load every kernel (the CPU rehearsal).
+
 Registers per thread and spills need a cubin and a reader of its ELF notes (cuobjdump), which the
 PyPI CUDA wheels here do not ship; PTX says neither, so they are not reported.
 """
@@ -81,21 +85,25 @@ def load_every_kernel(runs=RUNS, end=END):
 
 
 def _compile(job):
-    """(module name, arch, ptx text or None, error text, seconds) of one compile: run in a worker."""
+    """(module name, arch, ptx text ("" into the cache) or None, error text, seconds) of one compile:
+    run in a worker."""
     module, arch, out = job
-    from gpusph_ros.sph.cuda_build import compile_ptx
+    from gpusph_ros.sph.cuda_build import compile_cached, compile_ptx
 
     start = time.perf_counter()
     try:
+        if out is None:
+            compile_cached(module, arch)
+            return module.name, arch, "", "", time.perf_counter() - start
         ptx = compile_ptx(module, arch, Path(out)).read_text()
         return module.name, arch, ptx, "", time.perf_counter() - start
     except RuntimeError as err:
         return module.name, arch, None, str(err), time.perf_counter() - start
 
 
-def build_and_read(archs, jobs: int = 1) -> dict:
-    """Load every kernel, compile every module of the package for ``archs``, read the PTX: {rows, failures,
-    unloaded, atomics, seconds}."""
+def build_and_read(archs, jobs: int = 1, cache: bool = False) -> dict:
+    """Load every kernel, compile every module of the package for ``archs`` (none: no compile; ``cache``:
+    cubin into Warp's cache, unread), read the PTX: {rows, failures, unloaded, atomics, seconds}."""
     from gpusph_ros.sph import cuda_build
 
     start = time.perf_counter()
@@ -103,7 +111,7 @@ def build_and_read(archs, jobs: int = 1) -> dict:
     loaded = time.perf_counter() - start
     modules = cuda_build.loaded_modules()
     unloaded = sorted(cuda_build.defined_kernels() - cuda_build.loaded_kernels(modules))
-    out = tempfile.mkdtemp(prefix="cuda_code_")
+    out = None if cache else tempfile.mkdtemp(prefix="cuda_code_")
     work = [(m, arch, out) for m in modules for arch in archs]
     # compiles are independent; Warp's module objects are not picklable, so threads, which NVRTC
     # (a C library) runs side by side
@@ -114,6 +122,8 @@ def build_and_read(archs, jobs: int = 1) -> dict:
     for name, arch, ptx, error, seconds in results:
         if ptx is None:
             failures.append(error)
+            continue
+        if not ptx:  # into the cache: built, not read
             continue
         atomics += [f"{name}: sm_{arch}: {line}" for line in cuda_build.float_atomic_adds(ptx)]
         for kernel, f64 in cuda_build.f64_arithmetic(ptx).items():
@@ -146,21 +156,25 @@ def main() -> int:
                         "Warp's NVRTC builds for, and 90")
     parser.add_argument("--out", type=Path, help="a CSV of the rows")
     parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
+    parser.add_argument("--cache", action="store_true", help="cubin into Warp's kernel cache, not read")
+    parser.add_argument("--no-compile", action="store_true", help="only check that the runs load every kernel")
     args = parser.parse_args()
     from gpusph_ros.sph.cuda_build import oldest_arch
 
-    archs = args.arch or sorted({oldest_arch(), 90})
-    found = build_and_read(archs, args.jobs)
+    archs = [] if args.no_compile else (args.arch or sorted({oldest_arch(), 90}))
+    found = build_and_read(archs, args.jobs, args.cache)
     rows = found["rows"]
-    print(f"{found['modules']} modules of the package loaded by {len(RUNS)} runs in {found['loaded_s']:.0f} s; "
-          f"compiled for {', '.join(f'sm_{a}' for a in archs)} in {found['compile_s']:.0f} s")
+    built = (f"compiled for {', '.join(f'sm_{a}' for a in archs)}{' into the cache' if args.cache else ''} in "
+             f"{found['compile_s']:.0f} s ({args.jobs} at a time)" if archs else "not compiled (--no-compile)")
+    print(f"{found['modules']} modules of the package loaded by {len(RUNS)} runs in {found['loaded_s']:.0f} s; {built}")
     heavy = sorted((r for r in rows if r["precision"] == "float32" and r["f64_arithmetic"] and r["arch"] == archs[0]),
                    key=lambda r: -r["f64_arithmetic"])
-    print(f"\nfloat64 arithmetic in float32 builds (sm_{archs[0]}), per kernel:")
-    print("| kernel | module | f64 instructions |\n| --- | --- | --- |")
+    if rows:
+        print(f"\nfloat64 arithmetic in float32 builds (sm_{archs[0]}), per kernel:")
+        print("| kernel | module | f64 instructions |\n| --- | --- | --- |")
     for r in heavy:
         print(f"| {r['kernel'][:60]} | {r['module']} | {r['f64_arithmetic']} |")
-    if args.out:
+    if args.out and rows:
         args.out.parent.mkdir(parents=True, exist_ok=True)
         with open(args.out, "w", newline="") as f:
             writer = csv.DictWriter(f, fieldnames=list(rows[0]))

@@ -116,8 +116,9 @@ def test_an_edited_state_is_refused_whole_and_changes_nothing():
 @pytest.mark.parametrize("search", ["lists", "cells"])
 def test_a_state_whose_list_rebuild_data_do_not_follow_from_its_positions_is_refused(search):
     """Issue 66, item 3: the sort reversed, the build positions moved (by 1 m, by 0.3 dx, to 1e30),
-    the cell ranges emptied or spread over every particle, the list lengths zeroed or cut: each
-    loaded with success and moved a resumed run by up to a millimetre, or failed its first step.
+    the cell ranges emptied or spread over every particle, the list lengths zeroed or cut, the ids
+    shuffled: each loaded with success and moved a resumed run by up to a millimetre, or failed its
+    first step.
     Each is refused, naming what does not follow from the positions, and the solver is unchanged."""
     solver = build(parse_scene(BODIES), dx=0.02, neighbour_search=search).solver()
     solver.advance(0.05)
@@ -140,7 +141,11 @@ def test_a_state_whose_list_rebuild_data_do_not_follow_from_its_positions_is_ref
              (edited(**{"neighbours._start": np.zeros_like(a["neighbours._start"]),
                         "neighbours._end": np.zeros_like(a["neighbours._end"])}), ranges),
              (edited(**{"neighbours._start": np.zeros_like(a["neighbours._start"]),
-                        "neighbours._end": np.full_like(a["neighbours._end"], n)}), ranges)]
+                        "neighbours._end": np.full_like(a["neighbours._end"], n)}), ranges),
+             # the ids shuffled: the bodies' particles were set on other particles' rest positions
+             # at the next step, which shrank until time stood still
+             (edited(**{"solver.ids": np.random.default_rng(1).permutation(a["solver.ids"])}),
+              "a moving body's particle")]
     if search == "lists":
         cases += [(edited(**{"neighbours.count": np.zeros_like(a["neighbours.count"])}), "neighbours.count is not"),
                   (edited(**{"neighbours.count": np.minimum(a["neighbours.count"], 3)}), "neighbours.count is not")]

@@ -29,7 +29,9 @@ def test_the_cpu_rehearsal_writes_every_section_of_the_report(tmp_path):
     report = (tmp_path / "report.md").read_text()
     assert out.returncode == 0, out.stdout + out.stderr + report
     sections = re.findall(r"^## (.*): (ok|FAILED) \(\d+ s\)$", report, flags=re.M)
-    assert len(sections) == 8 and all(state == "ok" for _, state in sections), sections
+    assert len(sections) == 9 and all(state == "ok" for _, state in sections), sections
+    assert re.search(r"^\d+ modules of the package loaded by \d+ runs", report, flags=re.M)  # the build's step
+    assert "0 never loaded by the runs" in report
     assert re.search(r"^cpu +lists .*\n^cpu +cells ", report, flags=re.M)  # the two searches side by side
     assert "every case repeats bit for bit" in report  # bench/repeat.py: the same run twice
     assert "no GPU figure below" in report and "every step passed" in report

@@ -251,7 +251,8 @@ def mismatch(solver, state) -> str:
             elif not _equal(live, given[name]):
                 return f"its {holder} value {name} differs from this solver's: the state is of another run"
     # last: it runs the sort's and the lists' passes over the state, whose every value must be in range
-    return _values(solver, state["arrays"], state["host"]) or _sort(solver, state["arrays"], _width(state))
+    return (_values(solver, state["arrays"], state["host"]) or _on_bodies(solver, state["arrays"])
+            or _sort(solver, state["arrays"], _width(state)))
 
 
 def _lists(solver, state) -> str:
@@ -268,6 +269,41 @@ def _lists(solver, state) -> str:
         return f"its neighbour lists are {width} wide, more than this solver's {widest}"
     if count.min(initial=0) < 0 or count.max(initial=0) > width:
         return f"neighbours.count lies outside [0, {width}]"
+    return ""
+
+
+def _rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Each v rotated by each unit quaternion q = (x, y, z, w) (Warp's order), row by row."""
+    u, w = q[:, :3], q[:, 3:4]
+    t = 2.0 * np.cross(u, v)
+    return v + w * t + np.cross(u, t)
+
+
+def _on_bodies(solver, arrays: dict) -> str:
+    """What puts a moving body's particle off where its body's pose places it, or "": each step sets
+    it there from its rest position, which ``solver.ids`` finds (shuffled ids loaded, and the bodies'
+    particles jumped onto others' places until the step vanished)."""
+    if "solver._poses" not in arrays:
+        return ""
+    from .bodies import FIXED
+
+    laws, poses = arrays["solver._laws"], arrays["solver._poses"]
+    body, ptype = arrays["solver.body"], arrays["solver.ptype"]
+    moving = (body >= 0) & (ptype == BOUNDARY)
+    moving[moving] = laws["kind"][body[moving]] != FIXED
+    if not moving.any():
+        return ""
+    b = body[moving]
+    rest = arrays["solver._rest"][arrays["solver.ids"][moving]]
+    placed = poses["x"][b] + _rotate(poses["q"][b], rest - laws["centre"][b])
+    pos = arrays["solver.pos"][moving].astype(np.float64)
+    off = np.linalg.norm(pos - placed, axis=1)
+    # float32 positions carry a rounding of their size; a particle one spacing off is not that
+    allowed = 1.0e-4 * solver.config.dx + 4.0 * np.finfo(arrays["solver.pos"].dtype).eps * np.abs(placed).max()
+    if off.max() > allowed:
+        i = int(np.flatnonzero(moving)[np.argmax(off)])
+        return (f"a moving body's particle ({i}) stands {off.max():.3g} m from where its body's pose and its rest "
+                f"position (solver._poses, solver._rest[solver.ids]) place it: ids, poses or positions were edited")
     return ""
 
 

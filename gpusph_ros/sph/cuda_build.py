@@ -101,6 +101,15 @@ def compile_ptx(module, arch: int, out_dir: Path) -> Path:
     return ptx[0]
 
 
+def compile_cached(module, arch: int):
+    """``module`` compiled for sm_``arch`` to cubin into Warp's own kernel cache, where a device of
+    that architecture finds it when it loads the module; RuntimeError with NVRTC's message."""
+    try:
+        wp.compile_aot_module(module, arch=arch, use_ptx=False)
+    except Exception as err:
+        raise RuntimeError(f"{module.name}: sm_{arch}: {type(err).__name__}: {err}") from None
+
+
 def float_atomic_adds(ptx: str) -> list:
     """The float atomic adds and reductions in a PTX text, one line each."""
     return [line.strip() for line in ptx.splitlines() if FLOAT_ATOMIC_ADD.search(line)]
