@@ -26,14 +26,15 @@ def build(scalar):
     @wp.kernel(enable_backward=False, module="unique")
     def bin_pressure(lo: wp.array(dtype=vec), hi: wp.array(dtype=vec), bound_lo: vec, bound_hi: vec,
                      pos: wp.array(dtype=vec), pressure: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
-                     counts: wp.array(dtype=wp.int32), part: wp.array2d(dtype=scalar), lead: int, step: int):
+                     counts: wp.array(dtype=wp.int32), part: wp.array2d(dtype=scalar), lead: int, step: int,
+                     members: int):
         """Block k's pressure sum of each pressure block into part[k] (sums.py: a fixed order of the
         terms) and the fluid particles in each into counts (integers: the same in any order)."""
         k = wp.tid()
         n = ptype.shape[0]
         for b in range(lo.shape[0]):
             part[k, b] = scalar(0.0)
-        for j in range(sums.SPAN):
+        for j in range(members):
             i = sums.member(k, j, lead, step)
             if i < n:
                 x = pos[i]

@@ -17,14 +17,14 @@ def build(scalar):
     @wp.kernel(enable_backward=False, module="unique")
     def column_sums(up: int, centres: wp.array(dtype=vec), radius2: wp.array(dtype=scalar),
                     pos: wp.array(dtype=vec), vel: wp.array(dtype=vec), ptype: wp.array(dtype=wp.int32),
-                    counts: wp.array(dtype=wp.int32), part: wp.array2d(dtype=vec), lead: int, step: int):
+                    counts: wp.array(dtype=wp.int32), part: wp.array2d(dtype=vec), lead: int, step: int, members: int):
         """Block k's velocity sum of each column into part[k] (sums.py: a fixed order of the terms)
         and the fluid particles in each into counts (integers: the same in any order)."""
         k = wp.tid()
         n = ptype.shape[0]
         for c in range(centres.shape[0]):
             part[k, c] = vec(scalar(0.0))
-        for j in range(sums.SPAN):
+        for j in range(members):
             i = sums.member(k, j, lead, step)
             if i < n:
                 if ptype[i] == FLUID:

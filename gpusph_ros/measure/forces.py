@@ -32,7 +32,8 @@ def build(scalar):
     def wrench_part(body_id: int, centre: vec, body: wp.array(dtype=wp.int32), pos: wp.array(dtype=vec),
                     mass: wp.array(dtype=scalar), acc: wp.array(dtype=vec), timed: int, stride: int,
                     fail: wp.array(dtype=wp.int32), clock: wp.array(dtype=wp.float64), span: wp.array(dtype=wp.float64),
-                    part: wp.array2d(dtype=vec), lead: int, step: int, chunk: int, launch_stride: int):
+                    part: wp.array2d(dtype=vec), lead: int, step: int, members: int, chunk: int,
+                    launch_stride: int):
         """Block k's share (sums.py) of the force and torque on the body (part[k, 0], part[k, 1]);
         ``timed``: of the step's impulse and angular impulse, its length added to span by block 0
         (a failed step adds nothing: its state is not kept)."""
@@ -51,7 +52,7 @@ def build(scalar):
                 span[0] = span[0] + dt
         force = zero
         torque = zero
-        for j in range(sums.SPAN):
+        for j in range(members):
             i = sums.member(k, j, lead, step)
             if i < n:
                 if body[i] == body_id:

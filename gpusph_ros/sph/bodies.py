@@ -729,8 +729,8 @@ def build(scalar):
     @wp.kernel(enable_backward=False, module="unique")
     def wrench_sums(laws: wp.array(dtype=Law), poses: wp.array(dtype=Pose), ptype: wp.array(dtype=wp.int32),
                     body: wp.array(dtype=wp.int32), pos: wp.array(dtype=vec), mass: wp.array(dtype=scalar),
-                    acc: wp.array(dtype=vec), part: wp.array2d(dtype=wp.vec3d), lead: int, step: int, chunk: int,
-                    stride: int):
+                    acc: wp.array(dtype=vec), part: wp.array2d(dtype=wp.vec3d), lead: int, step: int, members: int,
+                    chunk: int, stride: int):
         """Each floating body's force and torque about its centre of mass from the fluid: sum m_i
         acc_i and sum rho_i x m_i acc_i over its particles (the force pass's reactions), block k's
         share into part[k, 2 b] and part[k, 2 b + 1] (sums.py: a fixed order of the terms)."""
@@ -738,7 +738,7 @@ def build(scalar):
         n = ptype.shape[0]
         for s in range(part.shape[1]):
             part[k, s] = wp.vec3d(wp.float64(0.0))
-        for j in range(sums.SPAN):
+        for j in range(members):
             i = sums.member(k, j, lead, step)
             if i < n:
                 b = body[i]
@@ -776,7 +776,7 @@ def build(scalar):
     def work_on_fluid(laws: wp.array(dtype=Law), clock: wp.array(dtype=wp.float64), stride: int,
                       ptype: wp.array(dtype=wp.int32), body: wp.array(dtype=wp.int32), mass: wp.array(dtype=scalar),
                       acc: wp.array(dtype=vec), vel: wp.array(dtype=vec), part: wp.array2d(dtype=wp.float64),
-                      lead: int, step: int, chunk: int, launch_stride: int):
+                      lead: int, step: int, members: int, chunk: int, launch_stride: int):
         """Block k's share (part[k, 0], sums.py) of the work of one step (``stride`` steps dt:
         multirate's coarse step) of the moving bodies on the fluid: stride dt sum_w -m_w a_w . v_w
         over their particles, a_w the fluid's force on w over m_w and v_w their velocity at the
@@ -784,7 +784,7 @@ def build(scalar):
         k = wp.tid() * launch_stride + chunk
         n = ptype.shape[0]
         work = wp.float64(0.0)
-        for j in range(sums.SPAN):
+        for j in range(members):
             i = sums.member(k, j, lead, step)
             if i < n:
                 if moving(laws, ptype, body, i):

@@ -268,7 +268,7 @@ def build(scalar):
                mass: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32),
                clumped: wp.array(dtype=wp.int32), faulty: wp.array(dtype=wp.int32), solid_lo: wp.array(dtype=vec),
                solid_hi: wp.array(dtype=vec), total: wp.array(dtype=wp.float64), count: wp.array(dtype=wp.int32),
-               part: wp.array2d(dtype=wp.float64), lead: int, step: int):
+               part: wp.array2d(dtype=wp.float64), lead: int, step: int, members: int):
         """Block k's share of the fluid's kinetic + potential + elastic energy into part[k, 0]
         (sums.py: a fixed order of the terms); total[RHO_LOW], total[RHO_HIGH] hold the lowest and
         highest density of a fluid particle not at fault seen in any census; count[CLUMPED] counts
@@ -283,7 +283,7 @@ def build(scalar):
         high = wp.float64(-1.0e300)
         clumps = int(0)
         first = int(NO_FAILURE)
-        for j in range(sums.SPAN):
+        for j in range(members):
             i = sums.member(k, j, lead, step)
             if i < n:
                 if ptype[i] == FLUID:

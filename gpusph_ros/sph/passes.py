@@ -268,7 +268,7 @@ def _force_passes(scalar):
     @wp.kernel(enable_backward=False, module="unique")
     def wall_energy(p: Params, grid: Grid, nb: Walk,
                     pos: wp.array(dtype=vec), mass: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
-                    part: wp.array2d(dtype=wp.float64), lead: int, step: int, chunk: int, stride: int):
+                    part: wp.array2d(dtype=wp.float64), lead: int, step: int, members: int, chunk: int, stride: int):
         """Block k's share (part[k, 0], sums.py) of the energy the repulsive walls (Lennard-Jones,
         Monaghan-Kajtar) hold, which the census adds to the fluid's, so that it sums what a
         conservative wall conserves: a fluid particle pressed against such a wall gives that energy
@@ -276,7 +276,7 @@ def _force_passes(scalar):
         k = wp.tid() * stride + chunk
         n = ptype.shape[0]
         held = wp.float64(0.0)
-        for q in range(sums.SPAN):
+        for q in range(members):
             i = sums.member(k, q, lead, step)
             if i < n:
                 if ptype[i] == FLUID:
