@@ -63,12 +63,7 @@ obstacles:
 """
 # the other scene of the race: the same tank with one floating body of another name, so that a bag
 # holding the other run's messages shows by its topics
-SCENE_B = """name: soak_float
-dim: 2
-tank: [1.2, 0.6]
-fluid:
-  - {name: water, lo: [0.1, 0.0], hi: [1.2, 0.3]}
-obstacles:
+SCENE_B = SCENE.split("obstacles:")[0].replace("soak_bodies", "soak_float") + """obstacles:
   - {name: float, lo: [0.5, 0.25], hi: [0.7, 0.35], displaces_fluid: true, floating: {density: 500}}
 """
 FOREIGN = {"soak_bodies": ("/bodies/float/",), "soak_float": ("/bodies/paddle/", "/bodies/box/")}

@@ -245,6 +245,19 @@ def test_killed_run_leaves_its_complete_chunks_readable(tmp_path):
     assert again.returncode == 0 and "is whole: nothing to repair" in again.stdout, again.stdout + again.stderr
 
 
+def _clock_bag(path, count: int):
+    """A finished bag at ``path`` of ``count`` /clock messages 1 ms apart, in chunks of about 2 kB."""
+    from gpusph_ros.output.messages import clock
+    from gpusph_ros.output.recording import BagRecorder, qos_yaml
+
+    recorder = BagRecorder(path, {"scene": "none"}, chunk_size=2048)
+    recorder.add_topic("/clock", "rosgraph_msgs/msg/Clock", qos_yaml())
+    for k in range(count):
+        recorder.write("/clock", clock(k * 1e-3), k * 1e-3)
+    recorder.close({"status": "completed"})
+    return path
+
+
 def test_repair_mends_a_bag_cut_at_any_point(tmp_path):
     """A bag of 600 /clock messages in chunks of about 2 kB, cut at 10 points along its length and
     right after its opening magic: --repair leaves each with the messages of its complete chunks,
@@ -253,15 +266,9 @@ def test_repair_mends_a_bag_cut_at_any_point(tmp_path):
 
     from rosgraph_msgs.msg import Clock
 
-    from gpusph_ros.output.messages import clock
-    from gpusph_ros.output.recording import BagRecorder, qos_yaml, whole_messages
+    from gpusph_ros.output.recording import whole_messages
 
-    whole = tmp_path / "whole"
-    recorder = BagRecorder(whole, {"scene": "none"}, chunk_size=2048)
-    recorder.add_topic("/clock", "rosgraph_msgs/msg/Clock", qos_yaml())
-    for k in range(600):
-        recorder.write("/clock", clock(k * 1e-3), k * 1e-3)
-    recorder.close({"status": "completed"})
+    whole = _clock_bag(tmp_path / "whole", 600)
     size = (whole / "whole_0.mcap").stat().st_size
     recovered = []
     for cut in [8 + 3] + [size * k // 11 for k in range(1, 11)]:
@@ -448,15 +455,7 @@ def test_repair_names_what_a_whole_looking_file_cannot_read(tmp_path):
     """Issue 66, item 8: a bag that ends with its footer but whose record after the header declares
     16 GiB was called whole ("nothing to repair") while neither gpusph-analyze nor rosbags could read
     it. --repair names the record and its byte offset, and keeps what stands before it."""
-    from gpusph_ros.output.messages import clock
-    from gpusph_ros.output.recording import BagRecorder, qos_yaml
-
-    bag = tmp_path / "edited"
-    recorder = BagRecorder(bag, {"scene": "none"}, chunk_size=2048)
-    recorder.add_topic("/clock", "rosgraph_msgs/msg/Clock", qos_yaml())
-    for k in range(100):
-        recorder.write("/clock", clock(k * 1e-3), k * 1e-3)
-    recorder.close({"status": "completed"})
+    bag = _clock_bag(tmp_path / "edited", 100)
     file = bag / "edited_0.mcap"
     data = bytearray(file.read_bytes())
     second = 8 + 9 + int.from_bytes(data[9:17], "little")  # the record after the magic and the header
