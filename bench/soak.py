@@ -202,6 +202,10 @@ def soak(minutes: float, out: Path, seed: int, period: float, sample: float, clo
         qos = QoSProfile(depth=2000, reliability=ReliabilityPolicy.RELIABLE)
         targets = client.node.create_publisher(Header, "/sim_node/advance_to", qos)
 
+        from diagnostic_msgs.msg import DiagnosticArray
+
+        client.subscribe("/diagnostics", DiagnosticArray)
+
         def reached(msg):
             lockstep["answered"] += 1
             lockstep["refused"] += msg.frame_id == "refused"
@@ -319,13 +323,18 @@ def soak(minutes: float, out: Path, seed: int, period: float, sample: float, clo
                               "answered": latency <= ANSWER})
             time.sleep(rng.uniform(0.0, 2.0 * period))
         alive = node.poll() is None
-        if alive and clock == "lockstep":  # let the fluid reach every target sent
+        if alive and clock == "lockstep":
+            # every target still waiting lies ahead of the fluid, which each reset sent back to 0 (up
+            # to a thousand, the last some 100 s of simulated time ahead): an end time behind the
+            # fluid ends the run, and the node answers each waiting target with where it stopped
             lifecycle("activate")  # refused where it is active already
             client.call("set_paused", SetBool, timeout=10.0, data=False)
-            client.set(real_time_factor=0.0)
+            client.set(end_time=0.05)  # one output interval at the slowest output_rate the soak sets
             wait = time.monotonic() + 60.0
             while lockstep["answered"] < lockstep["sent"] and time.monotonic() < wait:
                 time.sleep(0.5)
+            lockstep["diagnostics"] = {kv.key: kv.value for kv in client.wait_for(
+                "/diagnostics", lambda m: bool(m), timeout=10.0)[-1].status[0].values}
         if alive:
             client.call("record", SetBool, timeout=10.0, data=False)
     finally:
@@ -377,7 +386,9 @@ def _report(out: Path, minutes, samples, calls, read, alive, ran, work, clock, l
              f"readable: {len(broken)}; holding another run's messages (topics of the other scene, or /clock "
              f"stamps not strictly increasing): {len(mixed)}",
              *([f"- lockstep targets sent: {lockstep['sent']:,}; answered {lockstep['answered']:,} (refused "
-                f"{lockstep['refused']:,}); never answered: {lost:,}"] if clock == "lockstep" else []),
+                f"{lockstep['refused']:,}); never answered: {lost:,}; the node's count at the end: "
+                + ", ".join(f"{k} {v}" for k, v in lockstep.get("diagnostics", {}).items() if k.startswith("lockstep"))]
+               if clock == "lockstep" else []),
              "", "| call | n | median ms | p99 ms | worst ms |",
              "| --- | --- | --- | --- | --- |"]
     for kind in sorted({c["kind"] for c in calls}):
