@@ -45,7 +45,8 @@ bench: $(STAMP)
 
 # every kernel of the package built for CUDA (sm_75, the oldest this Warp's NVRTC takes, and sm_90)
 # through Warp's NVRTC with no GPU, its PTX read for float atomic adds and float64 arithmetic
-# (bench/cuda_code.py; about 25 minutes on 2 cores, hence not in `make test`: docs/results/cuda_code.md)
+# (bench/cuda_code.py; up to a minute a force pass and architecture, too long for `make test`:
+# docs/results/cuda_code.md)
 cuda-check: $(STAMP)
 	$(BIN)/python bench/cuda_code.py --out runs/cuda_code.csv
 
