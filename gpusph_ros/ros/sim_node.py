@@ -638,14 +638,12 @@ class SimNode(LifecycleNode):
         t = sec + nanosec * 1e-9
         if self.session.clock_to(t):
             return
-        now = time.monotonic()
-        if now - self._clock_reset_at < CLOCK_RESET_INTERVAL:
+        if time.monotonic() - self._clock_reset_at < CLOCK_RESET_INTERVAL:
             self.clock_resets_deferred += 1
             self.get_logger().warning(f"the followed /clock went back to t = {t:.4f} s within "
                                       f"{CLOCK_RESET_INTERVAL:g} s of the last reset it asked for: the reset waits "
                                       "(two publishers on /clock?)", throttle_duration_sec=1.0)
             return
-        self._clock_reset_at = now
         self.get_logger().warning(f"the followed /clock went back to t = {t:.4f} s: resetting the run")
         answer = self._reset(Trigger.Request(), Trigger.Response())
         if not answer.success:
