@@ -196,11 +196,12 @@ def soak(minutes: float, out: Path, seed: int, period: float, sample: float, clo
 
     lockstep = {"sent": 0, "answered": 0, "refused": 0, "last_ns": 0}
     if clock == "lockstep":
-        from rclpy.qos import QoSProfile, ReliabilityPolicy
+        from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
         from std_msgs.msg import Header
 
         qos = QoSProfile(depth=2000, reliability=ReliabilityPolicy.RELIABLE)
-        targets = client.node.create_publisher(Header, "/sim_node/advance_to", qos)
+        targets = client.node.create_publisher(Header, "/sim_node/advance_to", QoSProfile(
+            history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE))  # as docs/node.md asks
 
         from diagnostic_msgs.msg import DiagnosticArray
 

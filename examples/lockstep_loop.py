@@ -28,7 +28,7 @@ import rclpy
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import WrenchStamped
 from rclpy.executors import SingleThreadedExecutor
-from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Header
 
@@ -68,7 +68,9 @@ class GzWorld:
 class Loop:
     def __init__(self, node, namespace: str, body: str):
         qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
-        self.pub = node.create_publisher(Header, f"{namespace}/advance_to", qos)
+        # KEEP_ALL: a target the node has not read yet holds publish() back rather than being overwritten
+        self.pub = node.create_publisher(Header, f"{namespace}/advance_to", QoSProfile(
+            history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE))
         self.answers, self.wrenches = [], {}
         self.cond = threading.Condition()
         node.create_subscription(Header, f"{namespace}/reached", self._answer, qos)

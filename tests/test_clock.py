@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import Header
@@ -222,8 +222,8 @@ def test_a_lockstep_master_steps_the_fluid_as_a_free_run_with_the_same_stops(tmp
     with _node(domain, tmp_path / "sim_node.log", "clock:=lockstep", "wrench_rate:=1000.0", "end_time:=1.0",
                scene="paddle_2d", dx=0.04) as (_, client):
         client.subscribe("/sim_node/reached", Header, depth=4000)
-        burst = client.node.create_publisher(Header, "/sim_node/advance_to",
-                                             QoSProfile(depth=2000, reliability=ReliabilityPolicy.RELIABLE))
+        burst = client.node.create_publisher(Header, "/sim_node/advance_to", QoSProfile(
+            history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE))
         # the answers are not kept for a late subscriber: this one is matched before the loop starts
         client.wait_for("/diagnostics", lambda m: bool(m) and "running" in m[-1].status[0].message, timeout=300.0)
         deadline = time.monotonic() + 30.0

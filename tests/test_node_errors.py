@@ -47,16 +47,15 @@ def test_sigterm_under_the_commands_threads_wait_is_quiet(node, monkeypatch):
     printed it from the commands thread, issue 58). Here the race is made certain: the context goes,
     then the executor waits. The thread ends quietly; an error while the context runs is raised."""
     executor = SingleThreadedExecutor(context=node.context)  # the node's own is spinning in its thread
-    monkeypatch.setattr(node, "_commands_executor", executor)
 
     def fault():
         raise RuntimeError("a fault of the commands thread")
 
     monkeypatch.setattr(executor, "spin", fault)
     with pytest.raises(RuntimeError, match="a fault of the commands thread"):
-        node._spin_commands()
+        node._spin(executor)
     rclpy.shutdown(context=node.context)
     with pytest.raises(Exception, match="failed to initialize wait set"):
         executor._spin_once_impl()  # what spin() does once its check of the context has passed
     monkeypatch.setattr(executor, "spin", executor._spin_once_impl)
-    node._spin_commands()
+    node._spin(executor)
