@@ -36,7 +36,7 @@ def build(scalar):
         return wp.float32(kind)
 
     @wp.func
-    def column(code: int, v: vec, rho: scalar, p: scalar, kind: wp.float32, spacing: wp.float64):
+    def column(code: int, v: vec, rho: scalar, p: scalar, kind: wp.float32, spacing: wp.float32):
         # codes index FIELDS: 0-2 velocity components, 3 density, 4 pressure, 5 kind, 6 spacing
         value = wp.float32(p)
         if code < 3:
@@ -46,13 +46,13 @@ def build(scalar):
         elif code == 5:
             value = kind
         elif code == 6:
-            value = wp.float32(spacing)
+            value = spacing
         return value
 
     @wp.kernel(enable_backward=False, module="unique")
     def pack(ids: wp.array(dtype=wp.int32), pos: wp.array(dtype=vec), vel: wp.array(dtype=vec),
              rho: wp.array(dtype=scalar), pressure: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
-             body: wp.array(dtype=wp.int32), hsml: wp.array(dtype=scalar), h: scalar, dx: wp.float64, turn: mat,
+             body: wp.array(dtype=wp.int32), hsml: wp.array(dtype=scalar), h: scalar, dx: wp.float32, turn: mat,
              codes: wp.array(dtype=wp.int32), out: wp.array2d(dtype=wp.float32), chunk: int, stride: int):
         i = wp.tid() * stride + chunk
         row = ids[i]
@@ -61,10 +61,11 @@ def build(scalar):
         for a in range(3):
             out[row, a] = wp.float32(x[a])
         v = turn * vel[i]
+        # the levels' ratio h_i / h is a power of two, exact in any precision: the float32 spacing is
+        # the one a float64 product would round to, with no float64 arithmetic in a float32 build
+        spacing = dx * wp.float32(hsml[i] / h)
         for k in range(codes.shape[0]):
-            out[row, 3 + k] = column(codes[k], v, rho[i], pressure[i], kind_of(ptype[i], body[i]),
-                                     # the levels' ratio h_i / h is a power of two, exact in any precision
-                                     dx * wp.float64(hsml[i]) / wp.float64(h))
+            out[row, 3 + k] = column(codes[k], v, rho[i], pressure[i], kind_of(ptype[i], body[i]), spacing)
 
     return pack
 
