@@ -8,7 +8,8 @@ reads the PTX: float atomic adds or reductions (none may stand in the package's 
 the float32 builds, float64 arithmetic per kernel. Prints a table and writes it as CSV with --out.
 
 Exit status 1 where a module fails to compile (its name and NVRTC's message printed), a kernel of
-the package was never loaded by RUNS, or a float atomic add stands in the package's PTX.
+the package was never loaded by RUNS, a float atomic add stands in the package's PTX, or a kernel of
+a float32 build does float64 arithmetic that ``cuda_build.F64_BY_DESIGN`` does not name.
 
     python bench/cuda_code.py [--arch 75 --arch 90] [--out docs/results/cuda_code.csv] [--jobs 2]
 
@@ -117,7 +118,7 @@ def build_and_read(archs, jobs: int = 1, cache: bool = False) -> dict:
     # (a C library) runs side by side
     with concurrent.futures.ThreadPoolExecutor(max_workers=jobs) as pool:
         results = list(pool.map(_compile, work))
-    precision = {m.name: _precision(m) for m in modules}
+    precision = {m.name: cuda_build.precision(m) for m in modules}
     rows, failures, atomics = [], [], []
     for name, arch, ptx, error, seconds in results:
         if ptx is None:
@@ -126,28 +127,13 @@ def build_and_read(archs, jobs: int = 1, cache: bool = False) -> dict:
         if not ptx:  # into the cache: built, not read
             continue
         atomics += [f"{name}: sm_{arch}: {line}" for line in cuda_build.float_atomic_adds(ptx)]
+        counts = cuda_build.instructions(ptx)
         for kernel, f64 in cuda_build.f64_arithmetic(ptx).items():
-            rows.append({"module": name, "precision": precision[name], "arch": arch, "kernel": kernel,
+            rows.append({"module": name, "precision": precision[name], "arch": arch,
+                         "kernel": cuda_build.kernel_name(kernel), "instructions": counts[kernel],
                          "f64_arithmetic": f64, "compile_s": round(seconds, 2)})
     return {"rows": rows, "failures": failures, "unloaded": unloaded, "atomics": atomics, "modules": len(modules),
             "loaded_s": loaded, "compile_s": time.perf_counter() - start - loaded}
-
-
-def _precision(module) -> str:
-    """float32 or float64: the scalar a module's kernels were built for (by their argument types),
-    "-" where none says."""
-    import warp as wp
-
-    from gpusph_ros.sph.cuda_build import _module_kernels
-
-    found = set()
-    for kernel in _module_kernels(module):
-        for arg in kernel.adj.args:
-            dtype = getattr(arg.type, "dtype", arg.type)
-            scalar = getattr(dtype, "_wp_scalar_type_", dtype)
-            if scalar in (wp.float32, wp.float64):
-                found.add(scalar.__name__)
-    return "float64" if found == {"float64"} else ("float32" if "float32" in found else "-")
 
 
 def main() -> int:
@@ -167,13 +153,17 @@ def main() -> int:
     built = (f"compiled for {', '.join(f'sm_{a}' for a in archs)}{' into the cache' if args.cache else ''} in "
              f"{found['compile_s']:.0f} s ({args.jobs} at a time)" if archs else "not compiled (--no-compile)")
     print(f"{found['modules']} modules of the package loaded by {len(RUNS)} runs in {found['loaded_s']:.0f} s; {built}")
+    from gpusph_ros.sph.cuda_build import F64_BY_DESIGN
+
     heavy = sorted((r for r in rows if r["precision"] == "float32" and r["f64_arithmetic"] and r["arch"] == archs[0]),
                    key=lambda r: -r["f64_arithmetic"])
     if rows:
         print(f"\nfloat64 arithmetic in float32 builds (sm_{archs[0]}), per kernel:")
-        print("| kernel | module | f64 instructions |\n| --- | --- | --- |")
+        print("| kernel | f64 instructions | of all | why |\n| --- | --- | --- | --- |")
     for r in heavy:
-        print(f"| {r['kernel'][:60]} | {r['module']} | {r['f64_arithmetic']} |")
+        print(f"| {r['kernel']} | {r['f64_arithmetic']} | {r['instructions']} | "
+              f"{F64_BY_DESIGN.get(r['kernel'], '**not by design**')} |")
+    stray = sorted({r["kernel"] for r in heavy if r["kernel"] not in F64_BY_DESIGN})
     if args.out and rows:
         args.out.parent.mkdir(parents=True, exist_ok=True)
         with open(args.out, "w", newline="") as f:
@@ -181,9 +171,10 @@ def main() -> int:
             writer.writeheader()
             writer.writerows(rows)
     for text, items in (("failed to compile", found["failures"]), ("never loaded by the runs", found["unloaded"]),
-                        ("float atomic adds", found["atomics"])):
+                        ("float atomic adds", found["atomics"]),
+                        ("kernels with float64 arithmetic in a float32 build, not in F64_BY_DESIGN", stray)):
         print(f"\n{len(items)} {text}" + "".join(f"\n  {item}" for item in items))
-    return 1 if found["failures"] or found["unloaded"] or found["atomics"] else 0
+    return 1 if found["failures"] or found["unloaded"] or found["atomics"] or stray else 0
 
 
 if __name__ == "__main__":

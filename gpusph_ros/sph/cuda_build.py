@@ -27,6 +27,34 @@ F64_ARITHMETIC = re.compile(
     r"ex2|lg2|sin|cos)(?:\.[a-z0-9]+)*\.f64\b|^\s*(?:@!?%p\d+\s+)?cvt(?:\.[a-z0-9]+)*\.f64\.|"
     r"^\s*(?:@!?%p\d+\s+)?cvt(?:\.[a-z0-9]+)*\.[a-z0-9]+\.f64\b", re.M)
 ENTRY = re.compile(r"^\s*\.(?:visible\s+)?\.entry\s+([A-Za-z_][A-Za-z0-9_]*)", re.M)
+# an instruction line of a kernel's body (not a directive, a label, a brace or a declaration)
+INSTRUCTION = re.compile(r"^\s*(?:@!?%p\d+\s+)?[a-z][a-z0-9]*(?:\.[a-z0-9_]+)*(?:\s[^;]*)?;")
+# the function's name in the entry Warp gives a kernel: <scope>__locals__<name>_<hash>_cuda_kernel_forward
+WARP_ENTRY = re.compile(r"^(.+)_[0-9a-f]{8}_cuda_kernel_forward$")
+
+# float64 arithmetic a float32 build keeps, by kernel, and why (docs/results/cuda_code.md has each
+# kernel's count against its instructions): time is float64 in every build so that the clock lands on
+# output times; sums of many terms accumulate in float64 in a fixed order (sums.py); a rigid body's
+# pose is float64 (it integrates over the whole run). None of these does float64 work on more than a
+# body's particles, a sensor's thread or one thread, but for the clock's step read in integrate and
+# check_displacement (the same two to four instructions in every thread) and the census's sums,
+# every 16 steps.
+F64_BY_DESIGN = {
+    "choose_dt": "the step and the clock, one thread a step",
+    "integrate": "the clock read and compared (uniform: the same four instructions in every thread)",
+    "move_walls": "a moving body's pose, on its particles only",
+    "wrench_sums": "a floating body's force and torque summed in float64, on its particles only",
+    "work_on_fluid": "the work of moving bodies summed in float64, on their particles only",
+    "wrench_part": "a body's wrench summed in float64 for the published wrench (an output, not a step)",
+    "census": "the fluid's energy summed in float64, every 16 steps",
+    "wall_energy": "the repulsive walls' energy summed in float64, with the census",
+    "check_particles": "an excluded particle's mass counted in integer units, on excluded particles only",
+    "check_displacement": "the clock's step read (uniform: the same two instructions in every thread)",
+    "transduce": "a sensor's face mean and response in float64, one thread a sensor",
+    "census_check": "the census's totals, one thread",
+    "exclusion_check": "the excluded mass's totals and the time of the first, one thread a step",
+    "tick": "the clock advanced, one thread a step",
+}
 
 
 def nvrtc_archs() -> list:
@@ -113,6 +141,51 @@ def compile_cached(module, arch: int):
 def float_atomic_adds(ptx: str) -> list:
     """The float atomic adds and reductions in a PTX text, one line each."""
     return [line.strip() for line in ptx.splitlines() if FLOAT_ATOMIC_ADD.search(line)]
+
+
+def kernel_name(entry: str) -> str:
+    """The function's name in a PTX entry name of Warp's (``entry`` itself where not Warp's)."""
+    found = WARP_ENTRY.match(entry)
+    return found.group(1).rsplit("__locals__", 1)[-1] if found else entry
+
+
+def precision(module) -> str:
+    """float32 or float64: the ``scalar`` a kernel of ``module`` was built with (the factory's
+    argument, read from the kernel function's closure), else the scalar of most of its kernels'
+    floating-point arguments (struct fields included); "-" where none says."""
+    for kernel in _module_kernels(module):
+        func = kernel.func
+        cells = dict(zip(func.__code__.co_freevars, (c.cell_contents for c in func.__closure__ or ())))
+        if cells.get("scalar") in (wp.float32, wp.float64):
+            return cells["scalar"].__name__
+
+    def scalars(t):
+        if hasattr(t, "vars"):  # a struct
+            for var in t.vars.values():
+                yield from scalars(var.type)
+            return
+        dtype = getattr(t, "dtype", t)
+        scalar = getattr(dtype, "_wp_scalar_type_", dtype)
+        if scalar in (wp.float32, wp.float64):
+            yield scalar.__name__
+
+    found = [s for kernel in _module_kernels(module) for arg in kernel.adj.args for s in scalars(arg.type)]
+    if not found:
+        return "-"
+    return max(("float32", "float64"), key=found.count)
+
+
+def instructions(ptx: str) -> dict:
+    """{entry (kernel) name: instructions in it} of a PTX text."""
+    out, name = {}, None
+    for line in ptx.splitlines():
+        entry = ENTRY.match(line)
+        if entry:
+            name = entry.group(1)
+            out[name] = 0
+        elif name is not None and INSTRUCTION.match(line):
+            out[name] += 1
+    return out
 
 
 def f64_arithmetic(ptx: str) -> dict:
