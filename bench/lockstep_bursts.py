@@ -15,7 +15,6 @@ Sent with a KEEP_ALL writer, as docs/node.md asks of a master, a burst the node 
 """
 import argparse
 import os
-import signal
 import subprocess
 import sys
 import threading
@@ -38,7 +37,7 @@ def main() -> int:
     from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
     from std_msgs.msg import Header
 
-    from ros_client import Client
+    from ros_client import Client, stop
 
     domain = 150 + os.getpid() % 80
     env = {**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
@@ -93,11 +92,7 @@ def main() -> int:
             "/diagnostics", lambda m: bool(m), timeout=10.0)[-1].status[0].values}
     finally:
         client.close()
-        node.send_signal(signal.SIGINT)
-        try:
-            node.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            node.kill()
+        stop(node)
     lost = sent - counts["answered"]
     history = f"KEEP_LAST {args.keep_last}" if args.keep_last else "KEEP_ALL"
     print(f"{args.bursts} bursts of {args.size} targets ({args.gap:g} s apart, {history}) in {took:.1f} s, beside "

@@ -38,7 +38,6 @@ import os
 import pickle
 import random
 import shutil
-import signal
 import statistics
 import subprocess
 import sys
@@ -130,7 +129,7 @@ def soak(minutes: float, out: Path, seed: int, period: float, sample: float, clo
     from rosgraph_msgs.msg import Clock
     from std_srvs.srv import SetBool, Trigger
 
-    from ros_client import Client
+    from ros_client import Client, stop
 
     rng = random.Random(seed)
     work = Path(tempfile.mkdtemp(prefix="soak_"))
@@ -341,12 +340,7 @@ def soak(minutes: float, out: Path, seed: int, period: float, sample: float, clo
     finally:
         ticking["run"] = False
         client.close()
-        if node.poll() is None:
-            node.send_signal(signal.SIGINT)
-            try:
-                node.wait(timeout=30)
-            except subprocess.TimeoutExpired:
-                node.kill()
+        stop(node)
         log.close()
     read += _check_closed_bags(bags, keep_open=False)
     return _report(out, minutes, samples, calls, read, alive, marker.exists(), work, clock, lockstep)

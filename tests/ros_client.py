@@ -2,6 +2,8 @@
 its own, a background executor, and blocking helpers with timeouts for services, parameters and
 topics."""
 import collections
+import signal
+import subprocess
 import threading
 import time
 
@@ -102,3 +104,14 @@ class Client:
         assert self.params.wait_for_services(timeout_sec=30.0)
         values = self._wait(self.params.get_parameters(list(names)), 30.0).values
         return {name: parameter_value_to_python(v) for name, v in zip(names, values)}
+
+
+def stop(proc, timeout=30.0):
+    """A node process stopped as ros2 run's Ctrl-C would (SIGINT), killed after ``timeout`` s."""
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGINT)
+    try:
+        proc.wait(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()

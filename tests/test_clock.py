@@ -21,7 +21,6 @@ for a robot simulator's, at 1 kHz of simulated time, in a process of its own on 
 """
 import contextlib
 import os
-import signal
 import subprocess
 import sys
 import threading
@@ -40,7 +39,7 @@ from std_srvs.srv import SetBool, Trigger
 from gpusph_ros.ros import node_params
 from gpusph_ros.runner import Run
 
-from ros_client import Client
+from ros_client import Client, stop
 
 pytestmark = pytest.mark.ros
 
@@ -110,11 +109,7 @@ def _node(domain: int, log: Path, *params, scene="collapse_2d", dx=0.01):
         yield proc, client
     finally:
         client.close()
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(timeout=60)
-        except subprocess.TimeoutExpired:
-            proc.kill()
+        stop(proc, timeout=60.0)
 
 
 @pytest.fixture(scope="module")

@@ -175,27 +175,24 @@ def precision(module) -> str:
     return max(("float32", "float64"), key=found.count)
 
 
-def instructions(ptx: str) -> dict:
-    """{entry (kernel) name: instructions in it} of a PTX text."""
+def _per_kernel(ptx: str, pattern) -> dict:
+    """{entry (kernel) name: lines of its body that ``pattern`` matches} of a PTX text."""
     out, name = {}, None
     for line in ptx.splitlines():
         entry = ENTRY.match(line)
         if entry:
             name = entry.group(1)
             out[name] = 0
-        elif name is not None and INSTRUCTION.match(line):
+        elif name is not None and pattern.match(line):
             out[name] += 1
     return out
+
+
+def instructions(ptx: str) -> dict:
+    """{entry (kernel) name: instructions in it} of a PTX text."""
+    return _per_kernel(ptx, INSTRUCTION)
 
 
 def f64_arithmetic(ptx: str) -> dict:
     """{entry (kernel) name: float64 arithmetic instructions in it} of a PTX text."""
-    out, name = {}, None
-    for line in ptx.splitlines():
-        entry = ENTRY.match(line)
-        if entry:
-            name = entry.group(1)
-            out[name] = 0
-        elif name is not None and F64_ARITHMETIC.match(line):
-            out[name] += 1
-    return out
+    return _per_kernel(ptx, F64_ARITHMETIC)
