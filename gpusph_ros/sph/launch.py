@@ -21,6 +21,14 @@ from concurrent.futures import ThreadPoolExecutor
 import warp as wp
 
 
+def usable_cores() -> int:
+    """The cores this process may run on: its CPU affinity where the system has one (taskset, a
+    container's cpuset, a test worker pinned to a core), not every core of the machine."""
+    if hasattr(os, "sched_getaffinity"):
+        return max(1, len(os.sched_getaffinity(0)))
+    return os.cpu_count() or 1
+
+
 class Launcher:
     # set by device_calls.strict: chunks one after the other, last first
     reverse_chunks = False
@@ -29,7 +37,7 @@ class Launcher:
         self.device = device
         if not device.is_cpu:
             threads = 1
-        self.threads = max(1, threads or os.cpu_count() or 1)
+        self.threads = max(1, threads or usable_cores())
         self._pool = ThreadPoolExecutor(self.threads) if self.threads > 1 else None
         self._loaded = set()
         self._serial = False

@@ -7,9 +7,9 @@ is there) are not run again. A case whose run fails is a row with that status; a
 dies is retried by the scheduler on another worker, and reported as failed if workers keep dying.
 """
 import dataclasses
-import os
 import time
 
+from ..sph.launch import usable_cores
 from .case import finished_row, run_case
 
 
@@ -18,7 +18,7 @@ def _local_cluster(study, device: str):
     from distributed import LocalCluster
 
     gpus = wp.get_cuda_device_count() if device.startswith("cuda") else 0
-    workers = study.workers or gpus or os.cpu_count() or 1
+    workers = study.workers or gpus or usable_cores()
     cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
     return cluster, gpus
 
@@ -54,7 +54,7 @@ def sweep(study, scheduler=None, client=None, progress=print) -> list:
             own_client = client = Client(cluster)
     try:
         workers = max(1, len(client.scheduler_info()["workers"]))
-        threads = max(1, (os.cpu_count() or 1) // workers)
+        threads = max(1, usable_cores() // workers)
         progress(f"{study.name}: {len(cases)} cases, {len(cases) - len(todo)} already finished, {len(todo)} to run "
                  f"on {workers} worker(s) -> {study.out}")
         futures = {}
