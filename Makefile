@@ -23,14 +23,14 @@ run: $(STAMP)
 	$(BIN)/gpusph-analyze $(RUN_DIR)
 
 # every test, the lint among them (tests/test_lint.py); markers unit, physics, ros, study (pytest.ini).
-# Warp's cpu device runs a kernel on one core, so the solver tests run one per core (pytest-xdist);
-# the node, recording and study tests start processes of their own and time what they answer, so
-# they run after them, two files at a time (each file's nodes on DDS domains of its own; every one
-# of their timing bounds holds on a loaded 2-core machine: 179 s and 186 s, where one at a time took
-# 357 s). The slowest are listed, to watch the 15-minute budget on 2 cores.
+# One pass, a pytest-xdist worker per core, each test file on one worker (--dist loadfile): a file's
+# fixtures wider than a test (a settled tank, a bore, a node) are made once, and its node, recording
+# and study tests, which time what their nodes answer, run one after another (each file's nodes on
+# DDS domains of its own; every one of their timing bounds holds on a loaded 2-core machine). A
+# unit or physics test runs on its worker's core alone (tests/conftest.py). The slowest are listed,
+# to watch the 15-minute budget on 2 cores.
 test: $(STAMP)
-	$(BIN)/python -m pytest -q -n auto --dist worksteal --durations=15 -m "unit or physics" tests
-	$(BIN)/python -m pytest -q -n 2 --dist loadfile --durations=5 -m "ros or study" tests
+	$(BIN)/python -m pytest -q -n auto --dist loadfile --durations=20 tests
 
 lint: $(STAMP)
 	$(BIN)/ruff check .

@@ -1,5 +1,5 @@
 """Regular waves in a flume, read at a gauge: when the paddle's steady wave stands there, and its
-height and period (bench/wavemaker.py, tests/test_wavemaker.py)."""
+height and period (bench/wavemaker.py)."""
 import math
 
 import numpy as np

@@ -1,6 +1,5 @@
 """A 2D wave flume: a paddle at the left end making regular waves (a ``piston`` or ``flap`` motion,
-scenes/schema.py) in still water, and free-surface gauges down it (bench/wavemaker.py,
-tests/test_wavemaker.py)."""
+scenes/schema.py) in still water, and free-surface gauges down it (bench/wavemaker.py)."""
 from .schema import parse_scene
 
 PADDLE = (0.04, 0.1)  # [m] the paddle's back and face along the flume
