@@ -159,3 +159,32 @@ def test_a_request_that_waits_too_long_for_the_solver_is_refused(tmp_path, monke
         s.close()
     assert not ok and "busy with a reset" in why, why
     assert not (tmp_path / "state.gpusph").exists()
+
+
+class SlowBatch(StandIn):
+    """A stand-in whose output takes 0.3 s, the host's time moving only at its end, as a batch of
+    steps on a device does (the host reads the clock once an output)."""
+
+    def step_output(self, interrupt, limit=None):
+        time.sleep(0.3)
+        return super().step_output(interrupt, limit)
+
+
+def test_paused_is_said_only_once_the_batch_under_way_has_ended(tmp_path):
+    """A pause asked in the middle of a batch: the state reads running until the batch ends, then
+    paused, and from then on the simulated time holds. (A node's /diagnostics said paused at t = 0
+    and then t = 0.0016 s, its first batch slowed by a kernel compile.)"""
+    s = _session(SlowBatch("a", []))
+    try:
+        time.sleep(0.1)  # the first batch is under way
+        assert s.set_paused(True)[0]
+        assert s.state == "running"
+        deadline = time.monotonic() + 5.0
+        while s.state != "paused" and time.monotonic() < deadline:
+            time.sleep(0.01)
+        held = s.run.solver.time
+        assert s.state == "paused" and held > 0.0
+        time.sleep(0.7)  # two batches' worth
+        assert s.run.solver.time == held and s.state == "paused"
+    finally:
+        s.close()

@@ -96,7 +96,9 @@ class Session:
             return "stepping"
         if not self.active:
             return "inactive"
-        return "paused" if self.paused else "running"
+        # paused once the solver has stopped: a batch of steps already under way ends first, and
+        # its time (read by the host at its end) must not move after "paused" was said
+        return "paused" if self.paused and not self._busy else "running"
 
     def _stepping(self) -> bool:
         return self.run is not None and self.run.next_output <= self._step_to
