@@ -178,23 +178,23 @@ def test_a_still_tank_with_a_zone_across_its_surface_stays_still_and_hydrostatic
 
 
 @pytest.mark.physics
-@pytest.mark.parametrize("boundary, tolerance", [("dynamic", 0.02), ("adami", 0.04)])
-def test_a_3d_still_tank_with_a_zone_is_as_still_and_hydrostatic_as_uniform_tanks(boundary, tolerance):
-    """3D, dx 4 cm (5 layers of water) with a 2 cm zone over the middle third, to 1 s. Uniform 3D
-    tanks this shallow read above hydrostatic themselves (dynamic walls: measured +1.6 to +2.5% at
-    2 cm, +2.5 to +4.3% at 4 cm, the narrow tank's side walls; extrapolated-pressure walls: +2.2 to
-    +2.8% and +4.1 to +8.3%), so each side of the interface is held to the uniform run at its own
-    spacing: every depth bin within ``tolerance`` of it (measured at 1 s: dynamic within 1.4%,
-    adami within 3.3%; at 2 s 1.6% and 3.4%, the fine side's top bin each time), mean speed below
-    0.5% and the fastest particle below 1% of sqrt(g H) (measured at 1 s: 0.03% and 0.18% dynamic,
-    0.30% and 0.72% adami), mass exact."""
+def test_a_3d_still_tank_with_a_zone_is_as_still_and_hydrostatic_as_uniform_tanks():
+    """3D, dx 4 cm (5 layers of water) with a 2 cm zone over the middle third, to 1 s, under the
+    default extrapolated-pressure walls. Uniform 3D tanks this shallow read above hydrostatic
+    themselves (+2.2 to +2.8% at 2 cm, +4.1 to +8.3% at 4 cm, the narrow tank's side walls), so each
+    side of the interface is held to the uniform run at its own spacing: every depth bin within 4%
+    of it (measured at 1 s: 3.3%, at 2 s 3.4%, the fine side's top bin each time), mean speed below
+    0.5% and the fastest particle below 1% of sqrt(g H) (measured at 1 s: 0.30% and 0.72%), mass
+    exact. Under dynamic walls (uniform: +1.6 to +2.5% at 2 cm, +2.5 to +4.3% at 4 cm) the same
+    tanks read within 1.4% of the uniform runs, speeds 0.03% and 0.18%, at 1 s (1.6% at 2 s): that
+    case left the suite for its 15 minutes (issue 67), its figures measured with this test's code."""
     depth, width = 0.2, 0.16
     tank = {"name": "tank", "dim": 3, "tank": [0.6, width, 0.32],
             "fluid": [{"name": "water", "lo": [0.0, 0.0, 0.0], "hi": [0.6, width, depth]}]}
     zone = {"name": "middle", "lo": [0.2, 0.0, 0.0], "hi": [0.4, width, 0.32], "ratio": 0.5}
 
     def still(data, dx):
-        model = build(parse_scene(data), dx=dx, boundary=boundary)
+        model = build(parse_scene(data), dx=dx)
         solver = model.solver()
         solver.advance(1.0)
         return model, solver.snapshot()
@@ -209,7 +209,7 @@ def test_a_3d_still_tank_with_a_zone_is_as_still_and_hydrostatic_as_uniform_tank
         assert speed[side].mean() < 0.005 and speed[side].max() < 0.01
         uniform, uniform_snap = still(tank, dx)
         expected = pressure_bins(uniform, uniform_snap, uniform_snap["ptype"] == 0, depth)
-        assert np.nanmax(np.abs(pressure_bins(model, snap, side, depth) - expected)) < tolerance
+        assert np.nanmax(np.abs(pressure_bins(model, snap, side, depth) - expected)) < 0.04
 
 
 COLUMN = {**TANK, "fluid": [{"name": "water", "lo": [0.0, 0.0], "hi": [0.12, 0.2]}]}
