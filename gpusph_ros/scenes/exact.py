@@ -10,6 +10,10 @@ carries rho U^2 / 2 (Milne-Thomson, Theoretical Hydrodynamics, Section 11.52).
 A thin sheet: in 3D, water ``depth`` spacings deep sliding at U over a horizontal plate and off its
 sharp edge (issue 56). On the plate it is hydrostatic, rho g d at its bottom; off the edge it falls
 freely at ambient pressure, 0: a fluid in tension there reads what no sheet of water holds.
+
+A submerged box: in 3D, a box standing on the floor of a tank of still water (issue 68). Everywhere
+the pressure is hydrostatic, rho g d; on the box's top d is the water over it, and no fluid, at its
+edges least of all, is in tension.
 """
 import numpy as np
 
@@ -92,3 +96,29 @@ def jet_force() -> float:
 def jet_stagnation_pressure() -> float:
     """rho U^2 / 2 [Pa] at the stagnation point."""
     return 0.5 * RHO0 * U ** 2
+
+
+# the submerged box [m]: a tank 0.6 x 0.3 m, water 0.2 m deep, a box 0.2 x 0.1 x 0.1 m in its middle
+BOX_TANK, BOX_DEPTH = (0.6, 0.3, 0.3), 0.2
+BOX_LO, BOX_HI = (0.2, 0.1, 0.0), (0.4, 0.2, 0.1)
+
+
+def submerged_box(dx: float):
+    """The submerged box's scene (a schema Scene): the box an obstacle on the tank's floor, its top
+    0.1 m under the surface, every edge of it under water; sensors 2 spacings across on its top, at
+    its centre (``top_centre``) and one sensor's diameter in from its upstream edge
+    (``top_edge``), and on the tank's floor beside it (``floor``, 0.2 m deep). Settled for 0.5 s
+    (a still tank's start), as tests/test_sensors.py's tanks are."""
+    from .schema import parse_scene
+
+    (x0, y0, _), (x1, y1, top) = BOX_LO, BOX_HI
+    middle = (y0 + y1) / 2
+    probes = {name: {"type": "pressure_sensor", "position": position, "normal": [0, 0, 1], "diameter": 2 * dx}
+              for name, position in (("top_centre", [(x0 + x1) / 2, middle, top]),
+                                     ("top_edge", [x0 + 2 * dx, middle, top]),
+                                     ("floor", [x0 / 2, middle, 0.0]))}
+    return parse_scene({
+        "name": "submerged_box", "dim": 3, "tank": list(BOX_TANK), "depth": BOX_DEPTH, "walls": "particles",
+        "fluid": [{"name": "water", "lo": [0.0, 0.0, 0.0], "hi": [BOX_TANK[0], BOX_TANK[1], BOX_DEPTH]}],
+        "obstacles": [{"name": "box", "lo": list(BOX_LO), "hi": list(BOX_HI), "displaces_fluid": True}],
+        "probes": probes, "run": {"settle_tau": 0.05, "settle_until": 0.5}})
