@@ -113,7 +113,9 @@ def main() -> int:
     report = out / "report.md"
     env = {**os.environ, "GPUSPH_ROS_DEVICE": device, "PYTHONUNBUFFERED": "1"}
     if args.cpu:
-        machine = f"CPU rehearsal (Warp's cpu device, {os.cpu_count()} threads): no GPU figure below"
+        from gpusph_ros.sph.launch import usable_cores
+
+        machine = f"CPU rehearsal (Warp's cpu device, {usable_cores()} threads): no GPU figure below"
     else:
         gpu = wp.get_device(device)
         machine = f"GPU: {gpu.name} ({device}, {gpu.total_memory / 2**30:.1f} GiB), host {os.cpu_count()} CPU threads"

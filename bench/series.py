@@ -106,9 +106,9 @@ def parser(doc: str, out: str):
 
 def settings(args) -> dict:
     """The run settings of ``--set`` and ``--end-time``."""
-    import yaml
+    from gpusph_ros.scenes.settings import parse_set
 
-    out = {k: yaml.safe_load(v) for k, v in (item.split("=", 1) for item in args.set)}
+    out = dict(map(parse_set, args.set))
     if args.end_time:
         out["end_time"] = args.end_time
     return out

@@ -11,7 +11,6 @@ import argparse
 import time
 
 import numpy as np
-import yaml
 
 FLOOR = -50.0  # [Pa] the issue's: no fluid below it
 
@@ -33,14 +32,15 @@ def main():
     from gpusph_ros.sph.state import FLUID
 
     sc = submerged_box(args.dx)
-    extra = {k: yaml.safe_load(v) for k, v in (item.split("=", 1) for item in args.set)}
-    built = build_run(sc, resolve(sc, dx=args.dx, end_time=args.end, **extra))
+    built = build_run(sc, resolve(sc, sets=args.set, dx=args.dx, end_time=args.end))
     solver = built.solver()
     measurements = Measurements(solver, built)
     rho_g = built.config.rho0 * built.config.g_norm
     expected = {"top_centre": rho_g * (BOX_DEPTH - BOX_HI[2]), "top_edge": rho_g * (BOX_DEPTH - BOX_HI[2]),
                 "floor": rho_g * BOX_DEPTH}
     settled = built.config.settle_until
+    if args.end <= settled:
+        raise SystemExit(f"--end {args.end} s: the readings are taken after the settling, which ends at {settled} s")
     print(f"{solver.n} particles, dx {args.dx} m, {' '.join(args.set) or 'defaults'}; sensors [Pa] against "
           + ", ".join(f"{k} {v:.0f}" for k, v in expected.items()) + "; fluid min / p1 (below -50 Pa)")
     rows, lowest, start = [], np.inf, time.time()

@@ -12,7 +12,6 @@ the fluid's pressure in the sheet no lower than -0.1 rho U^2 / 2.
 import argparse
 
 import numpy as np
-import yaml
 
 from gpusph_ros.scenes.exact import PLATE_END, PLATE_TOP, SHEET_START, thin_sheet
 from gpusph_ros.scenes.exact import SHEET_SENSORS as SENSOR_X
@@ -38,8 +37,7 @@ def main():
     from gpusph_ros.sph.state import FLUID
 
     sc = thin_sheet(args.dx, args.depth)
-    extra = {k: yaml.safe_load(v) for k, v in (item.split("=", 1) for item in args.set)}
-    built = build_run(sc, resolve(sc, dx=args.dx, end_time=args.end, **extra))
+    built = build_run(sc, resolve(sc, sets=args.set, dx=args.dx, end_time=args.end))
     fluid = built.particles.ptype == FLUID
     built.particles.vel[fluid, 0] = args.speed
     solver = built.solver()

@@ -22,7 +22,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 import csv_rows
 from series import run_series
@@ -48,12 +47,13 @@ def main():
     from gpusph_ros.analysis.metrics import window_impulse as impulse
     from gpusph_ros.analysis.reference import data_dir, decourcy_pressures
     from gpusph_ros.scenes.reference import decourcy_scene
+    from gpusph_ros.scenes.settings import parse_set
 
     reference = decourcy_pressures(data_dir())
     sc, H = decourcy_scene(args.reading, args.tank_height)
     g = 9.81
     t_unit, p_unit = np.sqrt(g / H), 1000.0 * g * H
-    extra = {k: yaml.safe_load(v) for k, v in (s.split("=", 1) for s in args.set)}
+    extra = dict(map(parse_set, args.set))
     done = set()
     if args.out.exists():
         with open(args.out) as f:
