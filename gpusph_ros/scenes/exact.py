@@ -103,12 +103,14 @@ BOX_TANK, BOX_DEPTH = (0.6, 0.3, 0.3), 0.2
 BOX_LO, BOX_HI = (0.2, 0.1, 0.0), (0.4, 0.2, 0.1)
 
 
-def submerged_box(dx: float):
+def submerged_box(dx: float, current: bool = False):
     """The submerged box's scene (a schema Scene): the box an obstacle on the tank's floor, its top
     0.1 m under the surface, every edge of it under water; sensors 2 spacings across on its top, at
     its centre (``top_centre``) and one sensor's diameter in from its upstream edge
-    (``top_edge``), and on the tank's floor beside it (``floor``, 0.2 m deep). Settled for 0.5 s
-    (a still tank's start), as tests/test_sensors.py's tanks are."""
+    (``top_edge``), and on the tank's floor beside it (``floor``, 0.2 m deep). Still water is
+    settled for 0.5 s (a still tank's start), as tests/test_sensors.py's tanks are. With
+    ``current`` the tank is periodic along x, the flow's way, and not settled: give the fluid its
+    speed (``Model.particles.vel``) before the solver is made."""
     from .schema import parse_scene
 
     (x0, y0, _), (x1, y1, top) = BOX_LO, BOX_HI
@@ -121,4 +123,5 @@ def submerged_box(dx: float):
         "name": "submerged_box", "dim": 3, "tank": list(BOX_TANK), "depth": BOX_DEPTH, "walls": "particles",
         "fluid": [{"name": "water", "lo": [0.0, 0.0, 0.0], "hi": [BOX_TANK[0], BOX_TANK[1], BOX_DEPTH]}],
         "obstacles": [{"name": "box", "lo": list(BOX_LO), "hi": list(BOX_HI), "displaces_fluid": True}],
-        "probes": probes, "run": {"settle_tau": 0.05, "settle_until": 0.5}})
+        "probes": probes, **({"periodic": [True, False, False]} if current else
+                             {"run": {"settle_tau": 0.05, "settle_until": 0.5}})})

@@ -27,6 +27,7 @@ _SCALARS, _INTEGER_BYTES = 54, 52
 _LIST_SCALARS, _LIST_INTEGER_BYTES = 4, 8  # the sorted positions and h, the sorted kinds and the count
 _WALK_SCALARS, _WALK_INTEGER_BYTES = 1, 8  # h, the kinds and the needs as of the sort
 _STRESS = 6  # of the scalars: the SPS stress, held only under viscosity sps
+_WALL_NORMAL = 3  # beyond them: the walls' face normals, held only under wall_flux normal
 _LEVEL_BYTES = 20  # with zones: the levels' spawn and free-slot bookkeeping (sph/levels.py)
 USABLE = 0.9  # of the free memory a run may plan to take
 # the most particles whose arrays Warp can shape: the cell sort's keys hold 2 n int32 entries, and a
@@ -73,7 +74,7 @@ def device_bytes(n: int, cfg: SolverConfig, refined: bool = False) -> int:
     finest = 0.5 if refined else 1.0
     integers = _INTEGER_BYTES + (_LEVEL_BYTES if refined else 0)
     substeps = coarse_stride(cfg, refined)
-    scalars = _SCALARS - (0 if cfg.viscosity == "sps" else _STRESS)
+    scalars = _SCALARS - (0 if cfg.viscosity == "sps" else _STRESS) + (_WALL_NORMAL if cfg.wall_flux == "normal" else 0)
     if cfg.cell_walks:
         return n * ((scalars + _WALK_SCALARS) * scalar + integers + _WALK_INTEGER_BYTES)
     lists = 4 * default_max_neighbours(cfg.dim, cfg.hdx, finest, substeps)

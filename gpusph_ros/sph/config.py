@@ -22,6 +22,7 @@ VISCOSITIES = viscosity.NAMES
 BOUNDARIES = boundaries.NAMES
 MDBC_SLIPS = boundaries.mdbc.SLIPS
 DENSITY_DIFFUSIONS = density.DIFFUSIONS
+WALL_FLUXES = density.WALL_FLUXES
 PRECISIONS = ("float32", "float64")
 STEP_GRAPHS = graph.STEP_GRAPHS
 NEIGHBOUR_SEARCHES = ("auto", "lists", "cells")
@@ -191,6 +192,9 @@ class Numerics:
                                   "Eq. 2.26), >= 1", applies=RESET)
     density_diffusion: str = setting("delta", "density treatment: none, or delta-SPH (Molteni & Colagrossi 2009)",
                                      choices=DENSITY_DIFFUSIONS, node=True)
+    wall_flux: str = setting("full", "the wall particles' term of the continuity equation: the full relative "
+                                     "velocity, or over a flat face its part along the face's normal "
+                                     "(docs/solver.md)", choices=WALL_FLUXES, applies=RESET)
     delta: float = setting(0.1, "delta-SPH coefficient (Molteni & Colagrossi 2009)")
     xsph: bool = setting(False, "XSPH (thesis Eq. 2.22): on in the thesis runs, off by default as in DualSPHysics")
     xsph_eps: float = setting(0.5, "XSPH's epsilon (thesis Eq. 2.22)")
@@ -373,7 +377,10 @@ class SolverConfig(Numerics, HealthLimits, Domain):
                 raise ConfigError("periodic", self.periodic,
                                   f"periodic axes at least {shortest / (2 * self.h):.2f} kernel supports "
                                   f"({shortest:.4g} m) long; axis {axis} is shorter")
-        # mDBC's ghost nodes are offsets fixed at the start
+        # mDBC's ghost nodes and the walls' normals are fixed at the start
+        if any(m is not None for m in self.motions) and self.wall_flux == "normal":
+            raise ConfigError("wall_flux", self.wall_flux, "full: a scene with a moving body (the walls' normals "
+                                                           "do not follow it yet)")
         if any(m is not None for m in self.motions) and self.boundary == "mdbc":
             raise ConfigError("boundary", self.boundary, "dynamic or adami: a scene with a moving body (mdbc's "
                                                          "ghost nodes do not follow it yet)")

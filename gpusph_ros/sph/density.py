@@ -20,6 +20,8 @@ from . import kernels, neighbours, state
 
 DIFFUSIONS = ("none", "delta")  # the run setting ``density_diffusion``
 DENSITY_DIFFUSION_ID = {name: k for k, name in enumerate(DIFFUSIONS)}
+WALL_FLUXES = ("full", "normal")  # the run setting ``wall_flux``
+WALL_FLUX_ID = {name: k for k, name in enumerate(WALL_FLUXES)}
 FLUID = state.FLUID
 BOUNDARY = state.BOUNDARY
 
@@ -27,7 +29,8 @@ BOUNDARY = state.BOUNDARY
 def params(cfg) -> dict:
     """The Params field of the density treatment of ``cfg`` (a SolverConfig): delta h c0, 0 when
     diffusion is off (the Shepard filter's period is the solver's)."""
-    return {"delta_hc0": cfg.delta * cfg.h * cfg.sound_speed if DENSITY_DIFFUSION_ID[cfg.density_diffusion] else 0.0}
+    return {"delta_hc0": cfg.delta * cfg.h * cfg.sound_speed if DENSITY_DIFFUSION_ID[cfg.density_diffusion] else 0.0,
+            "wall_flux": WALL_FLUX_ID[cfg.wall_flux]}
 
 
 @functools.lru_cache(maxsize=None)
@@ -44,6 +47,16 @@ def build(scalar):
     @wp.func
     def continuity(m_b: scalar, u_ab: vec, grad: vec) -> scalar:
         return m_b * wp.dot(u_ab, grad)
+
+    @wp.func
+    def wall_flux(u_ab: vec, n_a: vec) -> vec:
+        """The relative velocity a wall particle's term of the continuity equation takes: its part
+        along n_a, the normal of the flat wall face under the fluid particle a (``wall_flux:
+        normal``, passes.wall_normal_at), or all of it where n_a is zero (``wall_flux: full``, and
+        near an edge or a corner)."""
+        if wp.length_sq(n_a) == scalar(0.0):
+            return u_ab
+        return wp.dot(u_ab, n_a) * n_a
 
     @wp.func
     def delta_diffusion(delta_hc0: scalar, rho_a: scalar, rho_b: scalar, m_b: scalar, r_ab: vec,
@@ -80,4 +93,4 @@ def build(scalar):
                         den += f.mass[j] / f.rho[j] * wk
         return num / den
 
-    return SimpleNamespace(continuity=continuity, delta_diffusion=delta_diffusion, shepard=shepard)
+    return SimpleNamespace(continuity=continuity, wall_flux=wall_flux, delta_diffusion=delta_diffusion, shepard=shepard)

@@ -61,7 +61,8 @@ def _force_passes(scalar):
     V = viscosity.build(scalar)
     visc_artificial, visc_laminar, sps_stress, sps_accel = V.artificial, V.laminar, V.sps_stress, V.sps_accel
     D = density.build(scalar)
-    continuity, delta_diffusion, shepard_density = D.continuity, D.delta_diffusion, D.shepard
+    continuity, wall_flux = D.continuity, D.wall_flux
+    delta_diffusion, shepard_density = D.delta_diffusion, D.shepard
     xsph_velocity = xsph.build(scalar).xsph_velocity
     Sh = shifting.build(scalar)
     concentration_terms, shift_velocity = Sh.concentration_terms, Sh.shift_velocity
@@ -74,10 +75,11 @@ def _force_passes(scalar):
     Walk, walk_from, walk_cells, walk_span, walk_at = N.Walk, N.walk_from, N.walk_cells, N.walk_span, N.walk_at
 
     @wp.func
-    def pair(p: Params, f: Fields, a: int, b: int, r_ab: vec):
+    def pair(p: Params, f: Fields, a: int, b: int, r_ab: vec, n_a: vec):
         """What particle b does to fluid particle a: (acceleration, drho/dt, XSPH velocity, |mu|,
         grad_a W_ab), the kernel gradient zero beyond the support and for walls whose particles carry
         no fluid volume (Lennard-Jones, Monaghan-Kajtar); nothing from another refinement level.
+        ``n_a``: the wall's normal seen from a (wall_normal_at; read under ``wall_flux: normal``).
 
         Only the fields a model needs are loaded: the pair loop is where the time goes.
         """
@@ -97,7 +99,10 @@ def _force_passes(scalar):
         u_ab = f.vel[a] - f.vel[b]
         grad = r_ab * grad_factor(p.kernel, norm, inv_h, r)
         r2_eta = wp.dot(r_ab, r_ab) + p.eta2 * scale * scale
-        drho = continuity(m_b, u_ab, grad)
+        if t_b == BOUNDARY:
+            drho = continuity(m_b, wall_flux(u_ab, n_a), grad)
+        else:
+            drho = continuity(m_b, u_ab, grad)
         if carries_fluid(t_b) and p.delta_hc0 > scalar(0.0):
             drho += delta_diffusion(p.delta_hc0 * scale, rho_a, rho_b, m_b, r_ab, grad, r2_eta, p.gravity, p.rho0, p.c0)
         acc = pressure_gradient(m_b, f.p_rho2[a], f.p_rho2[b], grad)
@@ -119,6 +124,32 @@ def _force_passes(scalar):
             xsph = xsph_velocity(p.xsph_eps, m_b, rho_a, rho_b, kernel_w(p.kernel, norm, inv_h, r), u_ab)
         mu = wp.abs(wp.dot(u_ab, r_ab)) / r2_eta
         return acc, drho, xsph, mu, grad
+
+    @wp.func
+    def wall_normal_at(p: Params, grid: Grid, nb: Walk, f: Fields, i: int) -> vec:
+        """Under ``wall_flux: normal``, the normal of the one flat wall face within fluid particle
+        i's support: its wall neighbours' face normals (faces.normals) where they all agree; zero
+        (the full relative velocity) near an edge or a corner, where they do not, where no wall of
+        its level is near, and under ``wall_flux: full``. Not the direction of the walls' kernel
+        gradient sum: the continuity term projected on that is the full one, lattice noise and all."""
+        n = vec(scalar(0.0))
+        if p.wall_flux == 0:
+            return n
+        count = int(0)
+        cell_i, reach_i = walk_from(grid, nb, i)
+        for w in range(walk_cells(reach_i)):
+            span = walk_span(grid, nb, i, cell_i, reach_i, w)
+            for slot in range(span[0], span[1]):
+                j = walk_at(grid, nb, i, slot)
+                if j >= 0:
+                    if f.ptype[j] == BOUNDARY and same_level(p, f.hsml[i], f.hsml[j]):
+                        n += f.wall_normal[j]
+                        count += 1
+        # unit normals that all agree sum to count of them; one edge or corner particle among
+        # them pulls the mean's length below 0.999
+        if count > 0 and wp.length(n) >= scalar(0.999) * scalar(count):
+            return wp.normalize(n)
+        return vec(scalar(0.0))
 
     @wp.func
     def track_max(maxima: wp.array(dtype=scalar), k: int, value: scalar):
@@ -189,6 +220,7 @@ def _force_passes(scalar):
             a = p.gravity
             mu_max = scalar(0.0)
             clump_r = p.clump_r * scale_i
+            n_i = wall_normal_at(p, grid, nb, f, i)
             cell_i, reach_i = walk_from(grid, nb, i)
             for w in range(walk_cells(reach_i)):
                 span = walk_span(grid, nb, i, cell_i, reach_i, w)
@@ -199,7 +231,7 @@ def _force_passes(scalar):
                         if carries_fluid(f.ptype[j]) and same_level(p, f.hsml[i], f.hsml[j]) \
                                 and wp.dot(r_ij, r_ij) < clump_r * clump_r:
                             close = 1
-                        da, ddr, dxs, mu, grad = pair(p, f, i, j, r_ij)
+                        da, ddr, dxs, mu, grad = pair(p, f, i, j, r_ij, n_i)
                         a += da
                         dr += ddr
                         xs += dxs
@@ -253,7 +285,7 @@ def _force_passes(scalar):
                             if p.wall_continuity != 0 and r < scalar(2.0) * h:
                                 dr += wall_density_rate(p.kernel, norm, inv_h, f.mass[j], ui, f.vel[j], r_ji, r)
                             if f.body[i] >= 0:
-                                da, ddr, dxs, mu, grad = pair(p, f, j, i, r_ji)
+                                da, ddr, dxs, mu, grad = pair(p, f, j, i, r_ji, vec(scalar(0.0)))  # its drho unread
                                 a -= f.mass[j] / f.mass[i] * da
         acc[i] = a
         drho[i] = dr

@@ -30,6 +30,7 @@ from . import (
     viscosity,
     xsph,
 )
+from .boundaries import faces
 from .config import RESET_FIELDS, SolverConfig, check_device
 from .device import chosen_device
 from .health import HealthError
@@ -195,8 +196,10 @@ class Solver:
         stress = n if cfg.viscosity == "sps" else 1
         shared = dict(pressure=self.pressure, p_rho2=wp.zeros(n, dtype=s, device=dev), mass=self.mass,
                       hsml=self.hsml, ptype=self.ptype, body=self.body, tau_diag=wp.zeros(stress, dtype=v, device=dev),
-                      tau_off=wp.zeros(stress, dtype=v, device=dev), wall_acc=wp.zeros(n, dtype=v, device=dev))
+                      tau_off=wp.zeros(stress, dtype=v, device=dev), wall_acc=wp.zeros(n, dtype=v, device=dev),
+                      wall_normal=wp.zeros(n if cfg.wall_flux == "normal" else 1, dtype=v, device=dev))
         self.wall_acc = shared["wall_acc"]
+        self.wall_normal = shared["wall_normal"]
         # the fixed obstacles' boxes: the health check's and the floating bodies' (at least one entry,
         # unread when there are none)
         solids = cfg.solids or [((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))]
@@ -274,6 +277,8 @@ class Solver:
         wp.launch(self._passes.equation_of_state, dim=n, inputs=[self.params, self.fields], device=dev)
         self._move_walls(0.0, self.pos, self.vel)  # the moving bodies' poses at t = 0, before any step
         self.boundary.prepare(self)
+        if cfg.wall_flux == "normal":
+            faces.launch(self, faces.build(s).normals, self.wall_normal)
         if cfg.zones:
             wp.launch(levels.build(s).mark_spawned, dim=n, inputs=[self.params, self.pos, self.hsml, self.ptype,
                                                                    self._zone_lo, self._zone_hi, self._zone_h,
@@ -312,7 +317,7 @@ class Solver:
 
     def _reorder(self):
         state = [self.pos, self.vel, self.rho, self.mass, self.hsml, self.ptype, self.body, self.ids,
-                 self._needs_list, self.ghost, self._spawned]
+                 self._needs_list, self.ghost, self._spawned] + [self.wall_normal] * (self.config.wall_flux == "normal")
         order = self.neighbours.sort(self.pos)
         for a in state:
             into = self._gathered[a.dtype]

@@ -72,6 +72,7 @@ def build(scalar):
         mk_d: scalar  # the Monaghan-Kajtar force's singular distance
         plane_r0: scalar
         delta_hc0: scalar  # delta h c0, 0 when density diffusion is off
+        wall_flux: int  # density.WALL_FLUX_ID: the wall particles' term of the continuity equation
         xsph_eps: scalar  # 0 when XSPH is off
         shift_a_h: scalar  # shifting's A h; 0 when shifting is off
         shift_tfs: scalar  # the free-surface threshold of div r
@@ -126,5 +127,6 @@ def build(scalar):
         tau_diag: wp.array(dtype=vec)  # SPS stress / rho: xx, yy, zz
         tau_off: wp.array(dtype=vec)  # xy, xz, yz
         wall_acc: wp.array(dtype=vec)  # a moving body's particles' acceleration (bodies.py); zero elsewhere
+        wall_normal: wp.array(dtype=vec)  # a wall particle's face's inward unit normal (wall_flux normal; else 1 entry)
 
     return SimpleNamespace(Params=Params, Fields=Fields)

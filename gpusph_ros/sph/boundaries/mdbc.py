@@ -24,10 +24,7 @@ pressures down to -0.9 rho U^2 / 2 where the truth is about 0, and the net force
 low (docs/results/wall_pressure.md). In 2D the unused third axis is padded with the identity, so
 one 4 x 4 system serves both dimensions.
 
-The ghost node follows from the scene's geometry, which is boxes: a tank wall particle (outside the
-tank) mirrors through the nearest point of the tank's inside (a corner particle through the corner,
-as DualSPHysics' corner normals do); an obstacle's particle (inside its solid box) through its
-nearest face other than a face on the tank floor, or through the edge where two faces tie.
+The ghost node is the particle's mirror image across the scene's nearest wall face (faces.py).
 
 The boundary velocity (English et al. 2021, Section 2.3; DualSPHysics' SlipMode), ``mdbc_slip``:
 - ``none``: the wall's own velocity, zero for the fixed walls here (DualSPHysics' default "DBC vel=0");
@@ -41,6 +38,7 @@ from types import SimpleNamespace
 import warp as wp
 
 from .. import eos, interpolate, kernels, neighbours, state
+from . import faces
 from .model import BoundaryModel
 
 FLUID = state.FLUID
@@ -59,10 +57,7 @@ class Mdbc(BoundaryModel):
 
     def prepare(self, solver):
         """The ghost-node offsets, once: the walls do not move."""
-        passes = build(solver.scalar)
-        wp.launch(passes.ghost_offsets, dim=solver.n, inputs=[solver.params, solver.pos, solver.ptype, solver.body,
-                                                              solver.solid_lo, solver.solid_hi, solver.ghost],
-                  device=solver.device)
+        faces.launch(solver, faces.build(solver.scalar).ghost_offsets, solver.ghost)
 
     def before_forces(self, solver, fields):
         """Once a step, before the first force pass, as DualSPHysics (MdbcCorrector off): the half
@@ -96,31 +91,6 @@ def build(scalar):
     eos_pressure, eos_density = E.pressure, E.density
 
     @wp.func
-    def ghost_offset(p: Params, x: vec, body: int, solid_lo: wp.array(dtype=vec),
-                     solid_hi: wp.array(dtype=vec)) -> vec:
-        """x_g - x_b for the boundary particle at x (``body`` its obstacle, -1 for the tank)."""
-        off = vec(scalar(0.0))
-        if body < 0:
-            for ax in range(3):
-                off[ax] = scalar(2.0) * (wp.clamp(x[ax], p.wall_lo[ax], p.wall_hi[ax]) - x[ax])
-            return off
-        lo = solid_lo[body]
-        hi = solid_hi[body]
-        up = p.dim - 1
-        nearest = scalar(1.0e30)
-        for ax in range(p.dim):
-            if ax != up or lo[ax] > p.wall_lo[ax]:  # a face on the floor faces no fluid
-                nearest = wp.min(nearest, x[ax] - lo[ax])
-            nearest = wp.min(nearest, hi[ax] - x[ax])
-        tie = nearest + scalar(1.0e-3) / p.inv_h
-        for ax in range(p.dim):
-            if (ax != up or lo[ax] > p.wall_lo[ax]) and x[ax] - lo[ax] <= tie:
-                off[ax] = scalar(-2.0) * (x[ax] - lo[ax])
-            elif hi[ax] - x[ax] <= tie:
-                off[ax] = scalar(2.0) * (hi[ax] - x[ax])
-        return off
-
-    @wp.func
     def ghost_density(p: Params, a: mat44, rhs: vec4, h_g: scalar) -> scalar:
         """The fluid's density at the ghost node from its sums (interpolate.py); where the ghost's
         kernel sum is a thin film's (below FILM_SUM) the Shepard sum no lower than rho0; rho0 where
@@ -136,16 +106,6 @@ def build(scalar):
         """The pressure at x_g + d: the ghost node's plus the hydrostatic difference across d,
         p_g + rho0 g.d (pressure cloning; the walls do not accelerate)."""
         return eos_pressure(rho_g, p.rho0, p.eos_b, p.gamma) + p.rho0 * wp.dot(p.gravity, d)
-
-    @wp.kernel(enable_backward=False, module="unique")
-    def ghost_offsets(p: Params, pos: wp.array(dtype=vec), ptype: wp.array(dtype=wp.int32),
-                      body: wp.array(dtype=wp.int32), solid_lo: wp.array(dtype=vec), solid_hi: wp.array(dtype=vec),
-                      ghost: wp.array(dtype=vec)):
-        """x_g - x_b of every boundary particle (zero for the fluid): the walls do not move."""
-        i = wp.tid()
-        ghost[i] = vec(scalar(0.0))
-        if ptype[i] == BOUNDARY:
-            ghost[i] = ghost_offset(p, pos[i], body[i], solid_lo, solid_hi)
 
     @wp.kernel(enable_backward=False, module="unique")
     def boundary_state(p: Params, grid: Grid, nb: Walk,
@@ -217,5 +177,5 @@ def build(scalar):
                         fluid, wall = occupied(p, grid, f, points[k], h_g, order[s], fluid, wall)
             pressure[k] = wet_share(fluid, wall) * cloned_pressure(p, ghost_density(p, a, rhs, h_g), -off)
 
-    return SimpleNamespace(ghost_offset=ghost_offset, ghost_offsets=ghost_offsets, boundary_state=boundary_state,
+    return SimpleNamespace(boundary_state=boundary_state,
                            face_pressure=face_pressure)
