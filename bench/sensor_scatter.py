@@ -9,7 +9,7 @@ floor, faces ``--diameter`` across, each read both ways, at the scene's output r
 impact), per sensor and reading: the mean, the step-to-step scatter (RMS of the change from one
 output to the next over the mean), the lowest value. One row per sensor and reading in ``--out``.
 
-    python bench/sensor_scatter.py [--dx 0.02] [--end 1.1] [--window 0.6 1.1] [--out CSV]
+    python bench/sensor_scatter.py [--dx 0.02] [--end 1.1] [--window 0.6 1.1] [--set KEY=VALUE ...] [--out CSV]
 """
 import argparse
 import csv
@@ -43,9 +43,13 @@ def main():
     ap.add_argument("--end", type=float, default=1.1)
     ap.add_argument("--window", type=float, nargs=2, default=(0.6, 1.1))
     ap.add_argument("--diameter", type=float, default=0.03)
+    ap.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE", help="more run settings")
     ap.add_argument("--out", default=str(REPO / "docs" / "results" / "sensor_scatter.csv"))
     args = ap.parse_args()
-    record = run_series(scene(args.diameter), dx=args.dx, end_time=args.end)
+    from gpusph_ros.scenes.settings import parse_set
+
+    sets = dict(map(parse_set, args.set))
+    record = run_series(scene(args.diameter), dx=args.dx, end_time=args.end, **sets)
     t = np.asarray(record["series"]["t"])
     inside = (t >= args.window[0]) & (t <= args.window[1])
     rows = []
@@ -55,7 +59,7 @@ def main():
             p = np.asarray(record["series"][f"sensors/{name}"])[inside]
             mean = float(np.mean(p))
             scatter = float(np.sqrt(np.mean(np.diff(p) ** 2)) / mean) if mean > 0.0 else float("nan")
-            rows.append({"dx": args.dx, "height_m": z, "reading": reading,
+            rows.append({"dx": args.dx, "settings": " ".join(args.set), "height_m": z, "reading": reading,
                          "window_s": f"{args.window[0]}-{args.window[1]}", "mean_pa": round(mean, 1),
                          "scatter_of_mean": round(scatter, 3), "min_pa": round(float(p.min()), 1),
                          "particles": record["particles"], "steps": record["steps"],
