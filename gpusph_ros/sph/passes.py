@@ -79,7 +79,7 @@ def _force_passes(scalar):
         """What particle b does to fluid particle a: (acceleration, drho/dt, XSPH velocity, |mu|,
         grad_a W_ab), the kernel gradient zero beyond the support and for walls whose particles carry
         no fluid volume (Lennard-Jones, Monaghan-Kajtar); nothing from another refinement level.
-        ``n_a``: the wall's normal seen from a (wall_normal_at; read under ``wall_flux: normal``).
+        ``n_a``: the normal of the flat wall face near a (wall_normal_at), zero for the full term.
 
         Only the fields a model needs are loaded: the pair loop is where the time goes.
         """
@@ -127,10 +127,11 @@ def _force_passes(scalar):
 
     @wp.func
     def wall_normal_at(p: Params, grid: Grid, nb: Walk, f: Fields, i: int) -> vec:
-        """Under ``wall_flux: normal``, the normal of the one flat wall face within fluid particle
-        i's support: its wall neighbours' face normals (faces.normals) where they all agree; zero
-        (the full relative velocity) near an edge or a corner, where they do not, where no wall of
-        its level is near, and under ``wall_flux: full``. Not the direction of the walls' kernel
+        """Under ``wall_flux: normal``, the normal of the one flat wall face near fluid particle i:
+        its listed wall neighbours' face normals (faces.normals; the lists reach a little beyond the
+        support, so an edge just outside it counts too) where they all agree; zero (the full
+        relative velocity) near an edge or a corner, where they do not, where no wall of its level
+        is near, and under ``wall_flux: full``. Not the direction of the walls' kernel
         gradient sum: the continuity term projected on that is the full one, lattice noise and all."""
         n = vec(scalar(0.0))
         if p.wall_flux == 0:
