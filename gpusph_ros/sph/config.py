@@ -378,10 +378,11 @@ class SolverConfig(Numerics, HealthLimits, Domain):
                                   f"periodic axes at least {shortest / (2 * self.h):.2f} kernel supports "
                                   f"({shortest:.4g} m) long; axis {axis} is shorter")
         # mDBC's ghost nodes and the walls' normals are fixed at the start
-        if any(m is not None for m in self.motions) and self.wall_flux == "normal":
+        moving = any(m is not None for m in self.motions)
+        if moving and self.wall_flux == "normal":
             raise ConfigError("wall_flux", self.wall_flux, "full: a scene with a moving body (the walls' normals "
                                                            "do not follow it yet)")
-        if any(m is not None for m in self.motions) and self.boundary == "mdbc":
+        if moving and self.boundary == "mdbc":
             raise ConfigError("boundary", self.boundary, "dynamic or adami: a scene with a moving body (mdbc's "
                                                          "ghost nodes do not follow it yet)")
         for k, plane in enumerate(self.planes):

@@ -128,7 +128,7 @@ def _force_passes(scalar):
     @wp.func
     def wall_normal_at(p: Params, grid: Grid, nb: Walk, f: Fields, i: int) -> vec:
         """Under ``wall_flux: normal``, the normal of the one flat wall face near fluid particle i:
-        its listed wall neighbours' face normals (faces.normals; the lists reach a little beyond the
+        its listed wall neighbours' face normals (faces.py; the lists reach a little beyond the
         support, so an edge just outside it counts too) where they all agree; zero (the full
         relative velocity) near an edge or a corner, where they do not, where no wall of its level
         is near, and under ``wall_flux: full``. Not the direction of the walls' kernel

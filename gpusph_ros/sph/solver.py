@@ -278,7 +278,7 @@ class Solver:
         self._move_walls(0.0, self.pos, self.vel)  # the moving bodies' poses at t = 0, before any step
         self.boundary.prepare(self)
         if cfg.wall_flux == "normal":
-            faces.launch(self, faces.build(s).normals, self.wall_normal)
+            faces.normals(self, self.wall_normal)
         if cfg.zones:
             wp.launch(levels.build(s).mark_spawned, dim=n, inputs=[self.params, self.pos, self.hsml, self.ptype,
                                                                    self._zone_lo, self._zone_hi, self._zone_h,

@@ -21,10 +21,20 @@ from .. import state
 BOUNDARY = state.BOUNDARY
 
 
-def launch(solver, kernel, out):
-    """``kernel`` (ghost_offsets or normals) over the solver's particles, into ``out``."""
-    wp.launch(kernel, dim=solver.n, inputs=[solver.params, solver.pos, solver.ptype, solver.body, solver.solid_lo,
-                                             solver.solid_hi, out], device=solver.device)
+def ghost_offsets(solver, out):
+    """Each of the solver's boundary particles' ghost-node offset x_g - x_b into ``out`` (mdbc.py)."""
+    _launch(solver, 0, out)
+
+
+def normals(solver, out):
+    """Each of the solver's boundary particles' face normal into ``out`` (``wall_flux: normal``)."""
+    _launch(solver, 1, out)
+
+
+def _launch(solver, unit: int, out):
+    wp.launch(build(solver.scalar).offsets, dim=solver.n, inputs=[solver.params, solver.pos, solver.ptype,
+                                                                  solver.body, solver.solid_lo, solver.solid_hi,
+                                                                  unit, out], device=solver.device)
 
 
 @functools.lru_cache(maxsize=None)
@@ -60,27 +70,19 @@ def build(scalar):
         return off
 
     @wp.kernel(enable_backward=False, module="unique")
-    def ghost_offsets(p: Params, pos: wp.array(dtype=vec), ptype: wp.array(dtype=wp.int32),
-                      body: wp.array(dtype=wp.int32), solid_lo: wp.array(dtype=vec), solid_hi: wp.array(dtype=vec),
-                      ghost: wp.array(dtype=vec)):
-        """x_g - x_b of every boundary particle; zero for the fluid."""
-        i = wp.tid()
-        ghost[i] = vec(scalar(0.0))
-        if ptype[i] == BOUNDARY:
-            ghost[i] = ghost_offset(p, pos[i], body[i], solid_lo, solid_hi)
-
-    @wp.kernel(enable_backward=False, module="unique")
-    def normals(p: Params, pos: wp.array(dtype=vec), ptype: wp.array(dtype=wp.int32),
+    def offsets(p: Params, pos: wp.array(dtype=vec), ptype: wp.array(dtype=wp.int32),
                 body: wp.array(dtype=wp.int32), solid_lo: wp.array(dtype=vec), solid_hi: wp.array(dtype=vec),
-                normal: wp.array(dtype=vec)):
-        """Every boundary particle's face's inward unit normal, towards its ghost node (the mean of
-        its faces' at an edge or a corner); zero for the fluid and for an obstacle's particle whose
-        faces all lie on the tank's walls."""
+                unit: int, out: wp.array(dtype=vec)):
+        """x_g - x_b of every boundary particle, or with ``unit`` its face's inward unit normal (the
+        mean of its faces' at an edge or a corner); zero for the fluid and for an obstacle's
+        particle whose faces all lie on the tank's walls."""
         i = wp.tid()
-        normal[i] = vec(scalar(0.0))
+        out[i] = vec(scalar(0.0))
         if ptype[i] == BOUNDARY:
             off = ghost_offset(p, pos[i], body[i], solid_lo, solid_hi)
-            if wp.length(off) > scalar(0.0):
-                normal[i] = wp.normalize(off)
+            if unit == 0:
+                out[i] = off
+            elif wp.length(off) > scalar(0.0):
+                out[i] = wp.normalize(off)
 
-    return SimpleNamespace(ghost_offsets=ghost_offsets, normals=normals)
+    return SimpleNamespace(offsets=offsets)

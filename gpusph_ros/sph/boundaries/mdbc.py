@@ -57,7 +57,7 @@ class Mdbc(BoundaryModel):
 
     def prepare(self, solver):
         """The ghost-node offsets, once: the walls do not move."""
-        faces.launch(solver, faces.build(solver.scalar).ghost_offsets, solver.ghost)
+        faces.ghost_offsets(solver, solver.ghost)
 
     def before_forces(self, solver, fields):
         """Once a step, before the first force pass, as DualSPHysics (MdbcCorrector off): the half
