@@ -524,13 +524,13 @@ def test_lifecycle_mode_without_autostart_and_sigterm_finishes_the_recording(tmp
 
 # -- bodies driven from ROS -------------------------------------------------------------------
 def test_a_paddle_driven_by_cmd_pose_follows_makes_waves_and_refuses_bad_commands(client):
-    """The built-in ``paddle_2d`` flume at 4 cm: a client streams cmd_pose at 100 Hz (wall clock),
+    """The built-in ``paddle_2d`` flume at 4 cm: a client streams cmd_pose at 100 Hz (wall clock, the node paced at 0.2 real time),
     each stamped with the newest /clock, the paddle's x a 1 Hz sinusoid of 1 cm about its start
     (published axes: x along the flume, z up). The node publishes the paddle's pose and wrench at
     every output (20 Hz); the pose follows the command one or two outputs behind (the best lag of
-    0-0.3 s, 0.05 s apart, is at most 0.1 s: the driver's one output and the command's trip), within
+    0-0.3 s, 5 ms apart, is at most 0.1 s: the driver's one output and the command's trip), within
     2 mm RMS there; the gauge 1 m down the flume sees waves. Then a NaN pose, one stamped 10 s ahead,
-    one 3 s old, a non-unit quaternion and one in another frame than the world's are refused (counted
+    one 2.5 s old, a non-unit quaternion and one in another frame than the world's are refused (counted
     on /diagnostics), and a 1 m jump is
     walked at no more than max_speed (0.5 m/s), the node alive and no particle lost."""
     import math
@@ -575,21 +575,26 @@ def test_a_paddle_driven_by_cmd_pose_follows_makes_waves_and_refuses_bad_command
 
     streamer = threading.Thread(target=stream, daemon=True)
     streamer.start()
+    # paced at a fifth of real time, as a robot's loop is paced: on an idle machine the node idles
+    # between outputs, and a command's wall delay is a fifth as long in simulated time (flat out,
+    # one loaded suite run starved the client and the tracking RMS read 4 mm)
+    assert client.set(real_time_factor=0.2)[0].successful
     assert client.call("set_paused", SetBool, data=False).success
     try:
-        client.wait_for("/clock", lambda m: m and _t(m[-1].clock) >= 3.0, timeout=240.0)
+        client.wait_for("/clock", lambda m: m and _t(m[-1].clock) >= 2.5, timeout=240.0)
     finally:
         done.set()
         streamer.join(timeout=5.0)
+        assert client.set(real_time_factor=0.0)[0].successful
     poses = client.received(pose_topic)
     t = np.array([_t(m.header.stamp) for m in poses])
     x = np.array([m.pose.position.x for m in poses])
-    assert np.all(np.diff(t) > 0) and len(t) >= 55
+    assert np.all(np.diff(t) > 0) and len(t) >= 45
     wrench_stamps = {_t(m.header.stamp) for m in client.received(wrench_topic)}
     assert set(t) <= wrench_stamps  # the wrench comes back with every pose
     late = t >= 1.0
     rms = {lag: float(np.sqrt(np.mean((x[late] - np.array([path(s - lag) for s in t[late]])) ** 2)))
-           for lag in np.arange(0.0, 0.301, 0.05)}
+           for lag in np.arange(0.0, 0.3001, 0.005)}
     best = min(rms, key=rms.get)
     assert best <= 0.1 + 1e-9 and rms[best] < 0.002, rms
     levels = np.array([m.point.z for m in client.received(gauge) if _t(m.header.stamp) >= 1.0])
@@ -598,7 +603,7 @@ def test_a_paddle_driven_by_cmd_pose_follows_makes_waves_and_refuses_bad_command
     now = sim_now()
     command(float("nan"), now)
     command(0.07, now + 10.0)
-    command(0.07, 1.0e-3)  # stale: stamped near t = 0, three seconds ago
+    command(0.07, 1.0e-3)  # stale: stamped near t = 0, 2.5 s ago
     command(0.07, now, q=(0.0, 0.0, 0.0, 2.0))
     status = _diagnostic(client, lambda s: int(s.get("commands_refused_paddle", 0)) >= 3)
     assert status["level"] != DiagnosticStatus.ERROR
