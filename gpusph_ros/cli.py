@@ -318,10 +318,15 @@ def plan_main(argv=None):
                         help="price the run from the scene alone, nothing built or run: particles, memory on "
                              "its device and whether it is free there, the fewest steps (for runs larger than "
                              "this machine, or for a device it does not have)")
+    parser.add_argument("--ranks", type=_at_least_one, default=None, metavar="N",
+                        help="the run cut for N MPI ranks instead: slabs of whole cells along the longest axis, "
+                             "each rank's particles, halo, memory and halo exchange a step (nothing timed); "
+                             "refused where a rank would be fewer than 3 cells across")
     args = parser.parse_args(argv)
     import warp as wp
 
     wp.config.log_level = wp.LOG_WARNING
+    from . import plan as pricing
     from .plan import coarse_plan, estimate, estimate_text, is_large, plan, plan_reductions, table, text
     from .scenes.schema import load_scene
     from .scenes.settings import resolve
@@ -330,6 +335,9 @@ def plan_main(argv=None):
     try:
         scene = load_scene(args.scene)
         config = resolve(scene, files=args.run_config, sets=args.set)
+        if args.ranks:
+            print(pricing.rank_text(pricing.rank_plan(scene, config, args.ranks)))
+            return 0
         if args.estimate:
             print(estimate_text(estimate(scene, config)))
             return 0

@@ -35,9 +35,11 @@ import yaml
 from .scenes import reduce, resources
 from .scenes.build import build_run, priced
 from .scenes.schema import parse_scene
-from .sph import ConfigError
+from .sph import ConfigError, decomposition
 from .sph.config import NEIGHBOUR_SEARCHES
 from .sph.device import default_device
+from .sph.kernels import coarse_stride
+from .sph.neighbours import list_skin
 
 # a proposed zone reaches this many of the scene's dx past an obstacle or a probe: more than a
 # coarse kernel support (2 h = 2.6 dx), so that the flow arriving there is fine before it does
@@ -133,6 +135,54 @@ def coarse_plan(scene, run_config, calibration_steps: int = 30) -> dict:
     return {**e, "mipps": timed["mipps"], "wall_s": e["particle_steps"] / (timed["mipps"] * 1e6),
             "calibration": {key: timed[key] for key in ("dx", "particles", "device", "calibration_steps",
                                                         "calibration_wall_s")}}
+
+
+def rank_plan(scene, run_config, ranks: int) -> dict:
+    """The run cut for ``ranks`` ranks (sph/decomposition.py) and what each rank holds: its particles,
+    its halo, its device memory (both, at resources.device_bytes a particle) and the bytes its halo
+    takes to refresh a step. The cells are one reach wide: the kernel support, with the neighbour
+    lists' skin where the run keeps lists (a list must find its neighbours in the halo until it is
+    rebuilt). A run of more than LARGE particles is cut as built at a spacing that makes about
+    CALIBRATION_PARTICLES, its counts scaled to the run's spacing (a slab's as dx^-dim, a halo's,
+    one reach thick, as dx^(1-dim)); its cells are counted at the run's spacing. ConfigError on
+    ``ranks`` where a rank would have fewer than decomposition.MIN_CELLS cells."""
+    cfg = run_config.solver
+    n = priced(scene, run_config)[2]
+    dx = cfg.dx * max(1.0, n / CALIBRATION_PARTICLES) ** (1.0 / scene.dim) if n > LARGE else cfg.dx
+    coarse = dataclasses.replace(run_config, numerics={**run_config.numerics, "dx": dx}, solver=cfg.replace(dx=dx))
+    model = build_run(scene, coarse)
+    mc = model.config
+    refined = bool(model.scene.refine)
+    reach = 2.0 * mc.h  # the scene's h: a refinement zone's particles are finer
+    if not mc.cell_walks:
+        reach *= list_skin(coarse_stride(mc, refined))
+    lo = [0.0, 0.0, 0.0]
+    hi = list(model.scene.tank) + [0.0] * (3 - len(model.scene.tank))
+    pos = model.particles.pos
+    fine = reach * cfg.dx / dx  # the reach at the run's spacing: the ranks' cells
+    spread = dx if dx != cfg.dx else 0.0
+    slabs = decomposition.split(pos, lo, hi, mc.periodic, fine, ranks, spread=spread)
+    scale, thin = (dx / cfg.dx) ** scene.dim, (dx / cfg.dx) ** (scene.dim - 1)
+    own = [int(round(scale * c)) for c in slabs.counts(pos, spread)]
+    halo = [int(round(thin * len(h))) for h in slabs.halos(pos, reach)]
+    scalar = 8 if cfg.precision == "float64" else 4
+    return {"scene": scene.name, "dx": cfg.dx, "ranks": ranks, "slabs": slabs.describe(), "reach": fine,
+            "scaled_from": None if dx == cfg.dx else dx, "particles": own, "halo": halo,
+            "device_bytes": [resources.device_bytes(a + b, mc.replace(dx=cfg.dx), refined) for a, b in zip(own, halo)],
+            "exchange_bytes": [decomposition.exchange_bytes(b, scalar) for b in halo]}
+
+
+def rank_text(r: dict) -> str:
+    scaled = f"; counted at dx = {r['scaled_from']:.3g} m and scaled" if r["scaled_from"] else ""
+    lines = [f"{r['scene']} on {r['ranks']} ranks at dx = {r['dx']:g} m: {r['slabs']} "
+             f"(reach {r['reach']:.3g} m{scaled})",
+             "rank  particles       halo  halo share  memory      halo a step"]
+    for k, (own, halo, mem, ex) in enumerate(zip(r["particles"], r["halo"], r["device_bytes"], r["exchange_bytes"])):
+        lines.append(f"{k:4d}  {own:>10,}  {halo:>9,}  {halo / max(own, 1):9.1%}  {mem / 2 ** 30:7.3g} GiB  "
+                     f"{ex / 2 ** 20:8.3g} MiB")
+    mean = sum(r["particles"]) / r["ranks"]
+    lines.append(f"imbalance: the largest rank holds {max(r['particles']) / mean - 1.0:+.1%} of the mean")
+    return "\n".join(lines)
 
 
 def is_large(scene, run_config) -> bool:

@@ -524,8 +524,8 @@ def test_lifecycle_mode_without_autostart_and_sigterm_finishes_the_recording(tmp
 
 # -- bodies driven from ROS -------------------------------------------------------------------
 def test_a_paddle_driven_by_cmd_pose_follows_makes_waves_and_refuses_bad_commands(client):
-    """The built-in ``paddle_2d`` flume at 4 cm: a client streams cmd_pose at 100 Hz (wall clock, the node paced at 0.2 real time),
-    each stamped with the newest /clock, the paddle's x a 1 Hz sinusoid of 1 cm about its start
+    """The built-in ``paddle_2d`` flume at 4 cm, paced at 0.2 real time: a client streams cmd_pose
+    at 100 Hz (wall clock), each stamped with the newest /clock, the paddle's x a 1 Hz sinusoid of 1 cm about its start
     (published axes: x along the flume, z up). The node publishes the paddle's pose and wrench at
     every output (20 Hz); the pose follows the command one or two outputs behind (the best lag of
     0-0.3 s, 5 ms apart, is at most 0.1 s: the driver's one output and the command's trip), within

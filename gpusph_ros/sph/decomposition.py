@@ -1,0 +1,152 @@
+"""One run's particles cut into slabs of whole cells along one axis, a slab a rank (issue 69).
+
+As GPUSPH v5 cuts a run across devices (Rustico et al., IEEE TPDS 2014): the axis is the domain's
+longest; it is cut into cells at least one kernel support (2 h of the largest h) wide, so that a
+particle's neighbours lie in its own cell or the next one on either side, and each rank takes a run
+of whole cells, at least ``MIN_CELLS`` of them (GPUSPH's bound: a rank's halo then never reaches past
+its neighbour's slab). The cuts are chosen where the particle counts balance: every particle
+counts, the walls' too, since a wall particle costs a rank memory and, near fluid, a neighbour walk.
+
+A rank's halo is the particles of other ranks in the cell just below its first and just above its
+last (across the period where the axis is periodic): all of its particles' neighbours that it does
+not own. ``exchange_bytes`` prices refreshing them: the state a force evaluation reads (position,
+velocity, density: 7 scalars) before each of a step's two evaluations (the predictor's and the
+corrector's), and, once a step, what a particle that enters a halo carries besides (mass and h: 2
+scalars; kind and body: 8 bytes; its identity: 8 bytes), priced for every halo particle (an upper
+bound: most stay in the halo from one step to the next).
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from .config import ConfigError
+
+MIN_CELLS = 3  # the fewest cells a rank's slab may be across (GPUSPH v5)
+STATE_SCALARS = 7  # position, velocity, density: what a force evaluation reads of a neighbour
+EVALUATIONS = 2  # force evaluations a step (predictor-corrector): a halo refresh before each
+IDENTITY_SCALARS, IDENTITY_BYTES = 2, 16  # mass, h; kind, body and the particle's id
+
+
+@dataclass(frozen=True)
+class Slabs:
+    """The cut of one run: ``axis`` (0, 1, 2: x, y, z), ``lo`` the first cell's low face [m],
+    ``cell`` the cells' width [m] (at least the support), ``n_cells`` of them, ``cuts`` the first
+    cell of each rank after the first, and whether the axis is ``periodic``."""
+
+    axis: int
+    lo: float
+    cell: float
+    n_cells: int
+    cuts: tuple
+    periodic: bool
+
+    @property
+    def ranks(self) -> int:
+        return len(self.cuts) + 1
+
+    def bounds(self) -> list:
+        """Each rank's cells, [first, last + 1)."""
+        edges = [0, *self.cuts, self.n_cells]
+        return list(zip(edges[:-1], edges[1:]))
+
+    def cell_of(self, pos: np.ndarray) -> np.ndarray:
+        """The cell along the axis of each position (n x dim or n x 3)."""
+        c = np.floor((np.asarray(pos)[:, self.axis] - self.lo) / self.cell).astype(np.int64)
+        return np.mod(c, self.n_cells) if self.periodic else np.clip(c, 0, self.n_cells - 1)
+
+    def rank_of(self, pos: np.ndarray) -> np.ndarray:
+        """The rank that owns each position."""
+        return np.searchsorted(np.asarray(self.cuts, dtype=np.int64), self.cell_of(pos), side="right")
+
+    def halos(self, pos: np.ndarray, width: "float | None" = None) -> list:
+        """For each rank, the indices of the particles it does not own within ``width`` (one cell by
+        default: the cell next to each end of its slab) of its slab along the axis, across the
+        period where the axis is periodic: its halo, in index order."""
+        width = self.cell if width is None else width
+        x, owner = np.asarray(pos)[:, self.axis], self.rank_of(pos)
+        span = self.n_cells * self.cell
+        out = []
+        for rank, (first, end) in enumerate(self.bounds()):
+            below = self.lo + first * self.cell - x  # how far below the slab's low face
+            above = x - (self.lo + end * self.cell)  # how far above its high face
+            if self.periodic:
+                below, above = np.mod(below, span), np.mod(above, span)
+            near = ((below > 0.0) & (below <= width)) | ((above >= 0.0) & (above < width))
+            out.append(np.flatnonzero(near & (owner != rank)))
+        return out
+
+    def counts(self, pos: np.ndarray, spread: float = 0.0) -> np.ndarray:
+        """The particles each rank owns (``split``'s ``spread``: each spread over that length)."""
+        below = _below(self, pos, spread)
+        return np.array([below[end] - below[first] for first, end in self.bounds()])
+
+    def describe(self) -> str:
+        """The cuts, as a run's first line says them: the axis and each cut's position [m]."""
+        if not self.cuts:
+            return f"one slab, {self.n_cells} cells of {self.cell:.4g} m along {'xyz'[self.axis]}"
+        where = ", ".join(f"{self.lo + c * self.cell:.4g}" for c in self.cuts)
+        return f"slabs along {'xyz'[self.axis]}, {self.n_cells} cells of {self.cell:.4g} m, cut at {where} m"
+
+
+def split(pos: np.ndarray, lo, hi, periodic, support: float, ranks: int, axis: "int | None" = None,
+          spread: float = 0.0) -> Slabs:
+    """Slabs for ``ranks`` ranks of the particles at ``pos`` (n x 3) in the domain [lo, hi] (the
+    particles' own bounds where they reach past it: the walls' layers), cells at least ``support``
+    [m] wide, along ``axis`` or the domain's longest: each cut on the cell face where the particles
+    below it come nearest to its share of them, every slab at least MIN_CELLS across. ``spread``:
+    each particle counted as spread evenly over that length about it (a coarser lattice standing
+    for a finer one: its planes would otherwise fall into some cells and miss others). ConfigError
+    on ``ranks`` where the axis has too few cells."""
+    pos = np.asarray(pos, dtype=float)
+    dim = pos.shape[1]
+    if not isinstance(ranks, (int, np.integer)) or ranks < 1:
+        raise ConfigError("ranks", ranks, "a whole number of at least 1")
+    if axis is None:
+        axis = int(np.argmax([float(hi[ax]) - float(lo[ax]) for ax in range(dim)]))
+    wrap = bool(periodic[axis])
+    low, high = float(lo[axis]), float(hi[axis])
+    if not wrap and len(pos):  # the walls' layers lie outside the tank
+        low, high = min(low, float(pos[:, axis].min())), max(high, float(np.nextafter(pos[:, axis].max(), np.inf)))
+    # a span of whole supports is that many cells, not one fewer from rounding (2.0 // 0.1 is 19)
+    n_cells = max(1, int(np.floor((high - low) / support * (1.0 + 1.0e-12))))
+    most = n_cells // MIN_CELLS
+    if ranks > max(1, most):
+        raise ConfigError("ranks", ranks, f"at most {max(1, most)}: {'xyz'[axis]} spans {n_cells} cells of "
+                          f"{(high - low) / n_cells:.4g} m (each at least a neighbour's reach), and a rank "
+                          f"needs at least {MIN_CELLS}")
+    slabs = Slabs(axis=axis, lo=low, cell=(high - low) / n_cells, n_cells=n_cells, cuts=(), periodic=wrap)
+    below = _below(slabs, pos, spread)
+    cuts, first = [], 0
+    for r in range(1, ranks):
+        lowest, highest = first + MIN_CELLS, n_cells - (ranks - r) * MIN_CELLS
+        faces = np.arange(lowest, highest + 1)
+        share = below[-1] * r / ranks
+        first = int(faces[np.argmin(np.abs(below[faces] - share))])
+        cuts.append(first)
+    return Slabs(axis=axis, lo=low, cell=slabs.cell, n_cells=n_cells, cuts=tuple(cuts), periodic=wrap)
+
+
+def _below(slabs: Slabs, pos: np.ndarray, spread: float) -> np.ndarray:
+    """The particles below each cell face (n_cells + 1 of them; ``split``'s ``spread``): with a
+    spread s, sum_i clip((f - x_i) / s + 1/2, 0, 1) at face f, the difference over s of the
+    integral G(t) = sum_i max(0, t - x_i), which sorted prefix sums give at every face at once."""
+    if spread <= 0.0:
+        counts = np.bincount(slabs.cell_of(pos), minlength=slabs.n_cells)
+        return np.concatenate([[0], np.cumsum(counts)])
+    x = np.sort(slabs.lo + (slabs.cell_of(pos) + 0.5) * slabs.cell if slabs.periodic else pos[:, slabs.axis])
+    prefix = np.concatenate([[0.0], np.cumsum(x)])
+    faces = slabs.lo + np.arange(slabs.n_cells + 1) * slabs.cell
+
+    def integral(t):
+        k = np.searchsorted(x, t)
+        return k * t - prefix[k]
+
+    below = (integral(faces + 0.5 * spread) - integral(faces - 0.5 * spread)) / spread
+    below[0], below[-1] = 0.0, len(x)
+    return below
+
+
+def exchange_bytes(halo: int, scalar_bytes: int) -> int:
+    """The bytes one rank receives a step to refresh a halo of ``halo`` particles (the module's
+    docstring): its state before each force evaluation and, once, what a particle carries with it."""
+    return halo * (EVALUATIONS * STATE_SCALARS * scalar_bytes + IDENTITY_SCALARS * scalar_bytes + IDENTITY_BYTES)
