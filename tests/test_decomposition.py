@@ -126,3 +126,25 @@ def test_gpusph_plan_prices_each_rank_from_the_particles_the_build_makes(capsys)
     assert all(0 < h < 0.15 * o for h, o in zip(halo, own))
     assert plan_main(["dambreak1_lab", "--set", "dx=0.03", "--ranks", "9"]) == 1
     assert "ranks: 9 is not allowed; expected at most" in capsys.readouterr().err
+
+
+def test_a_rebalance_moves_the_cuts_by_whole_cells_where_the_water_went():
+    """Cuts balanced on a dam break's column at rest, then the column spread along the tank (its
+    particles moved right as a surge moves them): the fullest rank holds far over the mean, so
+    ``rebalanced`` cuts the same cells again, every particle still owned once and each rank back
+    within the busiest cell of its share; under the threshold it keeps the cuts."""
+    pos = _cloud(seed=11)
+    args = ((0, 0, 0), (2.0, 0.5, 0), (False, False, False), 0.05, 3)
+    at_rest = split(pos, *args)
+    assert at_rest.imbalance(pos) < 0.1
+    moved = pos.copy()
+    moved[:, 0] = np.where(moved[:, 0] < 0.5, moved[:, 0] * 3.0, moved[:, 0])  # the column over 1.5 m
+    assert at_rest.imbalance(moved) > 0.5
+    again = at_rest.rebalanced(moved, threshold=0.2)
+    assert (again.axis, again.lo, again.cell, again.n_cells) == (at_rest.axis, at_rest.lo, at_rest.cell,
+                                                               at_rest.n_cells)
+    assert again.cuts != at_rest.cuts and again.cuts == split(moved, *args).cuts
+    counts = again.counts(moved)
+    assert counts.sum() == len(moved)
+    assert np.abs(counts - len(moved) / 3).max() <= np.bincount(again.cell_of(moved)).max()
+    assert again.rebalanced(moved, threshold=0.2) is again  # balanced now: kept

@@ -81,9 +81,9 @@ def device_arrays(solver) -> dict:
 
 
 # not stored: the lists, which put() builds again from the last build's sort, positions, sorted
-# kinds and h and the lists' lengths (NeighbourList.relist), and the sorted positions that build
-# gathers again
-NOT_STORED = ("neighbours.nbr", "neighbours._pos_sorted")
+# kinds and h and the lists' lengths (NeighbourList.relist), the sorted positions that build
+# gathers again, and the slot of each id, which each sort works out again from the ids
+NOT_STORED = ("neighbours.nbr", "neighbours._pos_sorted", "neighbours._slot_of")
 
 
 def _width(state) -> "int | None":
@@ -327,11 +327,17 @@ def _sort(solver, arrays: dict, width: int) -> str:
         built[order] = arrays["neighbours._ptype_sorted"]
     keys, values = wp.zeros(n, dtype=wp.int32, device=device), wp.zeros(n, dtype=wp.int32, device=device)
     x_dev = wp.array(x_build, dtype=vec, device=device)
+    slots = wp.array(np.arange(n, dtype=np.int32), dtype=wp.int32, device=device)  # each slot's key, in slot order
     wp.launch(nl._passes.cell_keys, dim=n, inputs=[nl.grid, x_dev, wp.array(built, dtype=wp.int32, device=device),
-                                                   keys, values], device=device)
+                                                   slots, keys, values], device=device)
     key = keys.numpy()[order]
     step = np.diff(key)
-    if (step < 0).any() or ((step == 0) & (np.diff(order) < 0)).any():
+    # a cell's particles by id (this version's sort) or by slot (the sort before it, keyed on the
+    # cell alone): the lists rebuilt from either are the run's
+    tied = step == 0
+    by_id, by_slot = (not ((np.diff(arrays["solver.ids"][order]) < 0) & tied).any(),
+                      not ((np.diff(order) < 0) & tied).any())
+    if (step < 0).any() or not (by_id or by_slot):
         return ("neighbours._order is not the cell sort of the build positions (neighbours._x_build): the "
                 "lists it rebuilds are not the run's")
     ncells = len(arrays["neighbours._start"])

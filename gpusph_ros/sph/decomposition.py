@@ -80,6 +80,30 @@ class Slabs:
         below = _below(self, pos, spread)
         return np.array([below[end] - below[first] for first, end in self.bounds()])
 
+    def recut(self, pos: np.ndarray, ranks: "int | None" = None, spread: float = 0.0) -> "Slabs":
+        """The same cells cut for ``ranks`` ranks (as many as now by default) where the particles at
+        ``pos`` balance (``split``): each cut on the face nearest its share, every slab at least
+        MIN_CELLS across. A rebalance moves the cuts by whole cells and keeps the cells."""
+        ranks = self.ranks if ranks is None else ranks
+        below = _below(self, pos, spread)
+        cuts, first = [], 0
+        for r in range(1, ranks):
+            faces = np.arange(first + MIN_CELLS, self.n_cells - (ranks - r) * MIN_CELLS + 1)
+            first = int(faces[np.argmin(np.abs(below[faces] - below[-1] * r / ranks))])
+            cuts.append(first)
+        return Slabs(axis=self.axis, lo=self.lo, cell=self.cell, n_cells=self.n_cells, cuts=tuple(cuts),
+                     periodic=self.periodic)
+
+    def imbalance(self, pos: np.ndarray) -> float:
+        """How far the fullest rank's particles exceed the mean, as a fraction of it."""
+        counts = np.bincount(self.rank_of(pos), minlength=self.ranks)
+        return float(counts.max() / max(counts.mean(), 1.0e-300) - 1.0) if len(pos) else 0.0
+
+    def rebalanced(self, pos: np.ndarray, threshold: float) -> "Slabs":
+        """These slabs cut again (``recut``) where the fullest rank holds more than ``threshold`` (a
+        fraction) over the mean; else these."""
+        return self.recut(pos) if self.imbalance(pos) > threshold else self
+
     def describe(self) -> str:
         """The cuts, as a run's first line says them: the axis and each cut's position [m]."""
         if not self.cuts:
@@ -114,16 +138,8 @@ def split(pos: np.ndarray, lo, hi, periodic, support: float, ranks: int, axis: "
         raise ConfigError("ranks", ranks, f"at most {max(1, most)}: {'xyz'[axis]} spans {n_cells} cells of "
                           f"{(high - low) / n_cells:.4g} m (each at least a neighbour's reach), and a rank "
                           f"needs at least {MIN_CELLS}")
-    slabs = Slabs(axis=axis, lo=low, cell=(high - low) / n_cells, n_cells=n_cells, cuts=(), periodic=wrap)
-    below = _below(slabs, pos, spread)
-    cuts, first = [], 0
-    for r in range(1, ranks):
-        lowest, highest = first + MIN_CELLS, n_cells - (ranks - r) * MIN_CELLS
-        faces = np.arange(lowest, highest + 1)
-        share = below[-1] * r / ranks
-        first = int(faces[np.argmin(np.abs(below[faces] - share))])
-        cuts.append(first)
-    return Slabs(axis=axis, lo=low, cell=slabs.cell, n_cells=n_cells, cuts=tuple(cuts), periodic=wrap)
+    cells = Slabs(axis=axis, lo=low, cell=(high - low) / n_cells, n_cells=n_cells, cuts=(), periodic=wrap)
+    return cells.recut(pos, ranks, spread)
 
 
 def _below(slabs: Slabs, pos: np.ndarray, spread: float) -> np.ndarray:
@@ -133,7 +149,10 @@ def _below(slabs: Slabs, pos: np.ndarray, spread: float) -> np.ndarray:
     if spread <= 0.0:
         counts = np.bincount(slabs.cell_of(pos), minlength=slabs.n_cells)
         return np.concatenate([[0], np.cumsum(counts)])
-    x = np.sort(slabs.lo + (slabs.cell_of(pos) + 0.5) * slabs.cell if slabs.periodic else pos[:, slabs.axis])
+    x = pos[:, slabs.axis]
+    if slabs.periodic:  # into the period: a particle spread over its end counts at that end
+        x = slabs.lo + np.mod(x - slabs.lo, slabs.n_cells * slabs.cell)
+    x = np.sort(x)
     prefix = np.concatenate([[0.0], np.cumsum(x)])
     faces = slabs.lo + np.arange(slabs.n_cells + 1) * slabs.cell
 

@@ -306,14 +306,25 @@ def build(scalar):
 
     @wp.kernel(enable_backward=False, module="unique")
     def cell_keys(grid: Grid, pos: wp.array(dtype=vec), ptype: wp.array(dtype=wp.int32),
-                  keys: wp.array(dtype=wp.int32), values: wp.array(dtype=wp.int32)):
-        """Each particle's cell; a vacant slot (levels.py) sorts past the last cell, in none."""
-        i = wp.tid()
+                  slot_of: wp.array(dtype=wp.int32), keys: wp.array(dtype=wp.int32),
+                  values: wp.array(dtype=wp.int32)):
+        """The cell of the particle whose id is k (its slot, slot_of[k]); a vacant slot (levels.py)
+        sorts past the last cell, in none. Keyed in id order, the stable sort orders each cell's
+        particles by id, whatever slots they stand in: every neighbour sum adds its terms in one
+        order, however the particles were ordered before (a permuted start, another rank's subset)."""
+        k = wp.tid()
+        i = slot_of[k]
         c = cell_coord(grid, pos[i])
-        keys[i] = (c[2] * grid.dims[1] + c[1]) * grid.dims[0] + c[0]
+        keys[k] = (c[2] * grid.dims[1] + c[1]) * grid.dims[0] + c[0]
         if ptype[i] == VACANT:
-            keys[i] = grid.dims[0] * grid.dims[1] * grid.dims[2]
-        values[i] = i
+            keys[k] = grid.dims[0] * grid.dims[1] * grid.dims[2]
+        values[k] = i
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def slots_of(ids: wp.array(dtype=wp.int32), slot_of: wp.array(dtype=wp.int32)):
+        """The slot each id stands in: the inverse of the permutation ``ids``."""
+        i = wp.tid()
+        slot_of[ids[i]] = i
 
     @wp.kernel(enable_backward=False, module="unique")
     def identity(order: wp.array(dtype=wp.int32)):
@@ -446,7 +457,8 @@ def build(scalar):
                     n += 1
         count[i] = n
 
-    return SimpleNamespace(Grid=Grid, Walk=G.Walk, cell_keys=cell_keys, identity=identity, cell_ranges=cell_ranges,
+    return SimpleNamespace(Grid=Grid, Walk=G.Walk, cell_keys=cell_keys, slots_of=slots_of, identity=identity,
+                           cell_ranges=cell_ranges,
                            gather_sorted=gather_sorted, gather_positions=gather_positions, listed_then=listed_then,
                            record_build=record_build, walk_count=walk_count,
                            neighbour_list=neighbour_list, check_displacement=check_displacement,
@@ -470,11 +482,12 @@ class NeighbourList:
 
     def __init__(self, scalar, dim: int, support: float, lo, hi, periodic, ptype: wp.array,
                  needs_list: wp.array, ghost: wp.array, max_neighbours: int, launcher, hsml: wp.array,
-                 variable: bool = False, substeps: int = 1, neighbour_major: "bool | None" = None,
+                 ids: wp.array, variable: bool = False, substeps: int = 1, neighbour_major: "bool | None" = None,
                  fail: "wp.array | None" = None, fail_slot: int = 0, hold: "wp.array | None" = None,
                  cells: bool = False):
-        """``ptype``, ``needs_list`` and ``ghost`` (each particle's ghost-node offset, see
-        neighbour_list) are the solver's own device arrays (it may reorder them); ``hsml``, each
+        """``ptype``, ``needs_list``, ``ghost`` (each particle's ghost-node offset, see
+        neighbour_list) and ``ids`` (each slot's particle, a permutation: the sort orders a cell's
+        particles by it) are the solver's own device arrays (it may reorder them); ``hsml``, each
         particle's smoothing length, which a pair's radius follows where ``variable`` (they differ:
         ``support`` is then the largest's); ``substeps``, the finest level's steps one launched
         step spans (2 with multirate), whose force passes all read these lists;
@@ -521,6 +534,8 @@ class NeighbourList:
         self._key_bits = ncells.bit_length()  # the vacant slots' key is ncells
         self._keys = wp.zeros(2 * n, dtype=wp.int32, device=device)
         self._order = wp.zeros(2 * n, dtype=wp.int32, device=device)
+        self._ids = ids
+        self._slot_of = wp.zeros(n, dtype=wp.int32, device=device)
         self._start = wp.zeros(ncells, dtype=wp.int32, device=device)
         self._end = wp.zeros(ncells, dtype=wp.int32, device=device)
         self.neighbour_major = device.is_cuda if neighbour_major is None else neighbour_major
@@ -573,8 +588,9 @@ class NeighbourList:
         """Sort the particles by cell; returns the particle index of each sorted position. The
         radix sort reads only the bits a cell index (and the vacant slots' key past the last cell)
         needs: 16 instead of 32 on DamBreak 1's grid."""
-        wp.launch(self._passes.cell_keys, dim=self.n, inputs=[self.grid, pos, self._ptype, self._keys, self._order],
-                  device=self.device)
+        wp.launch(self._passes.slots_of, dim=self.n, inputs=[self._ids, self._slot_of], device=self.device)
+        wp.launch(self._passes.cell_keys, dim=self.n,
+                  inputs=[self.grid, pos, self._ptype, self._slot_of, self._keys, self._order], device=self.device)
         wp.utils.radix_sort_pairs(self._keys, self._order, self.n, end_bit=self._key_bits)
         return self._order
 

@@ -112,7 +112,8 @@ class Solver:
         self._allocate(particles)
         self.neighbours = NeighbourList(self.scalar, cfg.dim, 2.0 * cfg.h, cfg.domain_lo, cfg.domain_hi,
                                         cfg.periodic, self.ptype, self._needs_list, self.ghost,
-                                        max_neighbours or 1, self.launch, self.hsml, self.params.variable_h != 0,
+                                        max_neighbours or 1, self.launch, self.hsml, self.ids,
+                                        self.params.variable_h != 0,
                                         self.params.coarse_stride, fail=self._fail,
                                         fail_slot=health.NEIGHBOUR_OVERFLOW, hold=self.flag(LISTS_HOLD),
                                         cells=cfg.cell_walks)
@@ -316,14 +317,28 @@ class Solver:
                           self._drho, self._xsph, self._shift, *out, which], device=self.device)
 
     def _reorder(self):
+        """The particles put in the cell order of a sort, and their lists built on it."""
+        self._put_in(self.neighbours.sort(self.pos))
+        self.neighbours.rebuild_sorted(self.pos)
+
+    def _put_in(self, order: wp.array):
+        """Each particle's state moved to the slot ``order`` gives it: slot k takes particle order[k]."""
         state = [self.pos, self.vel, self.rho, self.mass, self.hsml, self.ptype, self.body, self.ids,
                  self._needs_list, self.ghost, self._spawned] + [self.wall_normal] * (self.config.wall_flux == "normal")
-        order = self.neighbours.sort(self.pos)
         for a in state:
             into = self._gathered[a.dtype]
             wp.launch(self._passes.permute[a.dtype], dim=self.n, inputs=[order, a, into], device=self.device)
             wp.copy(a, into)
-        self.neighbours.rebuild_sorted(self.pos)
+
+    def permute(self, order):
+        """Put the particles in another slot order (slot k takes the particle in slot order[k]; a
+        permutation of the slots) between steps, and build their lists again. The run goes on bit for
+        bit as it would have: a cell's particles are summed in the order of their ids (neighbours.py)."""
+        order = np.asarray(order)
+        if order.shape != (self.n,) or not np.array_equal(np.sort(order), np.arange(self.n)):
+            raise ValueError(f"order: a permutation of this solver's {self.n} slots")
+        self._put_in(wp.array(order.astype(np.int32), dtype=wp.int32, device=self.device))
+        self.neighbours.rebuild(self.pos, force=True)
 
     def _launch_step(self, block: int = _UNBOUNDED):
         """One step towards the clock's TARGET, every decision in it taken on the device (the
