@@ -1,0 +1,82 @@
+"""How deep a rank's halo must be for one exchange a step (issue 69, docs/ranks.md).
+
+A rank's solver holds the particles of its slab (sph/decomposition.py, 2 ranks) and a halo the given
+number of cells deep (each cell a list radius wide) on each side. After every step its halo's positions,
+velocities and densities are refreshed from a run of the whole tank, as the exchange will refresh
+them from their owners. Both runs take the same fixed dt and build their lists at every step (ranks
+build theirs together). So the rank's own particles step bit for bit as the whole run's, for as long
+as the test runs, where:
+- the halo covers everything a step reads: the walls' pressure from the fluid, then two force
+  evaluations. That is 3 cells (4 under SPS, whose strain is one more neighbour pass);
+- the slab's own cells keep the particles they started with. Over these short runs none leaves
+  the halo's reach. The exchange moves them, and it is not built yet.
+
+With a 1-cell halo, the exchange would have to refresh the halo at each of the step's stages, as
+GPUSPH does. One exchange a step leaves the first step already off.
+"""
+import numpy as np
+import pytest
+
+from gpusph_ros.scenes.build import build_run
+from gpusph_ros.scenes.schema import load_scene
+from gpusph_ros.scenes.settings import resolve
+from gpusph_ros.sph.decomposition import split
+from gpusph_ros.sph.neighbours import list_skin
+from gpusph_ros.sph.particles import Particles
+from gpusph_ros.sph.solver import Solver
+
+pytestmark = pytest.mark.unit
+
+STATE = ("pos", "vel", "rho")
+
+
+def _by_id(solver) -> dict:
+    """The state in the solver's own precision, by particle id."""
+    slot = np.empty(solver.n, dtype=np.int64)
+    slot[solver.ids.numpy()] = np.arange(solver.n)
+    return {key: getattr(solver, key).numpy()[slot].copy() for key in STATE}
+
+
+def _first_difference(scene: str, dx: float, depth: int, steps: int, **sets) -> "int | None":
+    """The first step after which the slab's own particles differ from the whole run's, or None."""
+    sc = load_scene(scene)
+    model = build_run(sc, resolve(sc, dx=dx, end_time=10.0, dt_fixed=2.0e-4, **sets))
+    p = model.particles
+    whole = model.solver()
+    slabs = split(p.pos, (0.0, 0.0, 0.0), [*sc.tank, 0.0][:3], model.config.periodic,
+                  list_skin() * 2.0 * model.config.h, 2)
+    first, end = slabs.bounds()[0]
+    cell = slabs.cell_of(p.pos)
+    members = np.flatnonzero((cell >= first - depth) & (cell < end + depth))  # in id order: ids kept in order
+    own = (cell[members] >= first) & (cell[members] < end)
+    assert own.sum() > 300 and (~own).sum() > 0
+    part = Particles(pos=p.pos[members], vel=p.vel[members], rho=p.rho[members], mass=p.mass[members],
+                     ptype=p.ptype[members], body=p.body[members])
+    rank = Solver(model.config, part)
+    for k in range(steps):
+        for solver in (whole, rank):
+            solver.neighbours.stale.fill_(1)
+            solver.step()
+        ours, theirs = _by_id(rank), {key: a[members] for key, a in _by_id(whole).items()}
+        if not all(np.array_equal(ours[key][own], theirs[key][own]) for key in STATE):
+            return k
+        ids = rank.ids.numpy()
+        halo = np.flatnonzero(~own[ids])  # the halo's slots, refreshed from the whole run
+        for key in STATE:
+            getattr(rank, key).numpy()[halo] = theirs[key][ids[halo]]
+    return None
+
+
+@pytest.mark.parametrize("scene, dx, steps, sets", [
+    ("collapse_2d", 0.004, 300, {}),
+    ("collapse_2d", 0.004, 300, {"boundary": "mdbc", "shifting": True}),
+    ("dambreak1_lab", 0.05, 150, {}),
+])
+def test_a_halo_three_cells_deep_steps_a_slab_bit_for_bit_with_one_exchange_a_step(scene, dx, steps, sets):
+    assert _first_difference(scene, dx, 3, steps, **sets) is None
+    assert _first_difference(scene, dx, 1, 5, **sets) == 0  # one cell deep: off after the first step
+
+
+def test_sps_needs_a_fourth_cell():
+    assert _first_difference("collapse_2d", 0.004, 4, 300, viscosity="sps") is None
+    assert _first_difference("collapse_2d", 0.004, 2, 300, viscosity="sps") is not None
