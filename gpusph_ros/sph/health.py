@@ -204,7 +204,7 @@ def build(scalar):
     @wp.kernel(enable_backward=False, module="unique")
     def check_particles(p: Params, pos: wp.array(dtype=vec), pos_c: wp.array(dtype=vec), vel_c: wp.array(dtype=vec),
                         rho_c: wp.array(dtype=scalar), mass: wp.array(dtype=scalar), hsml: wp.array(dtype=scalar),
-                        ptype: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32),
+                        ptype: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32), owned: wp.array(dtype=wp.int32),
                         solid_lo: wp.array(dtype=vec), solid_hi: wp.array(dtype=vec),
                         fail: wp.array(dtype=wp.int32), faulty: wp.array(dtype=wp.int32),
                         pending: wp.array(dtype=wp.int32), pending_mass: wp.array(dtype=wp.int64)):
@@ -212,11 +212,13 @@ def build(scalar):
         fault, when exclusion is on, or that left the tank is marked in ``faulty`` for commit to exclude
         and counted in ``pending`` (by reason) and ``pending_mass`` (PENDING_FAULT or PENDING_LEFT, in
         p.mass_units); any other fault flags its slot in ``fail`` with the caller's particle id (the
-        slots are re-sorted by later steps of the batch)."""
+        slots are re-sorted by later steps of the batch). A rank checks only the particles it owns."""
         i = wp.tid()
         t = ptype[i]
         if t != FLUID and t != BOUNDARY:
             return  # already excluded
+        if p.ranked != 0 and owned[i] == 0:
+            return
         reason = fault(p, pos_c[i], pos[i], vel_c[i], rho_c[i], t, own_scale(p, hsml[i]), solid_lo, solid_hi)
         if reason < 0:
             return
@@ -266,6 +268,7 @@ def build(scalar):
     @wp.kernel(enable_backward=False, module="unique")
     def census(p: Params, pos: wp.array(dtype=vec), vel: wp.array(dtype=vec), rho: wp.array(dtype=scalar),
                mass: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32), ids: wp.array(dtype=wp.int32),
+               owned: wp.array(dtype=wp.int32),
                clumped: wp.array(dtype=wp.int32), faulty: wp.array(dtype=wp.int32), solid_lo: wp.array(dtype=vec),
                solid_hi: wp.array(dtype=vec), total: wp.array(dtype=wp.float64), count: wp.array(dtype=wp.int32),
                part: wp.array2d(dtype=wp.float64), lead: int, step: int, members: int):
@@ -286,7 +289,7 @@ def build(scalar):
         for j in range(members):
             i = sums.member(k, j, lead, step)
             if i < n:
-                if ptype[i] == FLUID:
+                if ptype[i] == FLUID and (p.ranked == 0 or owned[i] != 0):
                     if faulty[i] == 0:
                         low = wp.min(low, wp.float64(rho[i]))
                         high = wp.max(high, wp.float64(rho[i]))

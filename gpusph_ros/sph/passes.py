@@ -255,7 +255,9 @@ def _force_passes(scalar):
                 if p.n_planes > 1:
                     a += plane_corners(p.kernel, norm_i, inv_h_i, p.dim, xi, plane_point, plane_normal, p.n_planes,
                                        p_i, rho_i)
-            if p.variable_h != 0:
+            if p.ranked != 0 and f.owned[i] == 0:
+                pass  # a halo particle's rates are wrong at the halo's edge: its owner bounds the step
+            elif p.variable_h != 0:
                 # choose_dt reads the scene's h and sets the finest level's step: a particle of
                 # h_i = s h stepping m of those at once limits it as one of the scene's h with
                 # m^2 |a| / s and m mu + c0 (m / s - 1) / h would (Monaghan 1992's bounds

@@ -85,7 +85,7 @@ class Solver:
     """
 
     def __init__(self, config: SolverConfig, particles: Particles, max_neighbours: "int | None" = None,
-                 body_names: "list | None" = None):
+                 body_names: "list | None" = None, owned: "np.ndarray | None" = None):
         self.config = config.replace(device=chosen_device(config.device)).validate()
         # each body's name by id, for what a report says of it (the scene's obstacles)
         self.body_names = list(body_names) if body_names else [f"body {k}" for k in range(len(config.motions))]
@@ -97,6 +97,9 @@ class Solver:
         self.n = len(particles)
         if self.n == 0:
             raise ValueError("particles: the particle set is empty")
+        # one rank's solver (docs/ranks.md): ``owned`` marks the particles it owns (True) and its
+        # halo's (False), which it steps too but neither checks, counts nor lets bound the step
+        self._owned = None if owned is None else np.asarray(owned, dtype=bool).reshape(self.n)
         self._passes = passes.build(self.scalar)
         self.boundary = boundaries.model(cfg.boundary)
         self._fluid_mass = float(particles.mass[particles.ptype == FLUID].sum())
@@ -129,6 +132,7 @@ class Solver:
             self.neighbours.builds.zero_()
             self.clear_failure()
         self._step_hooks = []
+        self._dt_hooks = []
         self._graph = graph.LoopGraph(self)
         self.time, self.dt, self.dt_stable, self.steps = 0.0, 0.0, 0.0, 0
         self._excluded_host = (np.zeros(health.N_REASONS, dtype=np.int32), np.array(health.EXCLUDED_START))
@@ -148,7 +152,7 @@ class Solver:
         fields = {**passes.params(cfg), **kernels.params(cfg, float(self._h_particles.min())), **eos.params(cfg),
                   **viscosity.params(cfg),
                   **density.params(cfg), **xsph.params(cfg), **shifting.params(cfg), **boundaries.params(cfg),
-                  **health.params(cfg, self._fluid_mass, self.n_fluid)}
+                  **health.params(cfg, self._fluid_mass, self.n_fluid), "ranked": int(self._owned is not None)}
         declared = self._passes.Params.vars
         for name, value in fields.items():
             kind = declared[name].type
@@ -198,7 +202,9 @@ class Solver:
         shared = dict(pressure=self.pressure, p_rho2=wp.zeros(n, dtype=s, device=dev), mass=self.mass,
                       hsml=self.hsml, ptype=self.ptype, body=self.body, tau_diag=wp.zeros(stress, dtype=v, device=dev),
                       tau_off=wp.zeros(stress, dtype=v, device=dev), wall_acc=wp.zeros(n, dtype=v, device=dev),
-                      wall_normal=wp.zeros(n if cfg.wall_flux == "normal" else 1, dtype=v, device=dev))
+                      wall_normal=wp.zeros(n if cfg.wall_flux == "normal" else 1, dtype=v, device=dev),
+                      owned=arr(np.ones(1, dtype=np.int32) if self._owned is None else self._owned.astype(np.int32),
+                                wp.int32))
         self.wall_acc = shared["wall_acc"]
         self.wall_normal = shared["wall_normal"]
         # the fixed obstacles' boxes: the health check's and the floating bodies' (at least one entry,
@@ -325,6 +331,8 @@ class Solver:
         """Each particle's state moved to the slot ``order`` gives it: slot k takes particle order[k]."""
         state = [self.pos, self.vel, self.rho, self.mass, self.hsml, self.ptype, self.body, self.ids,
                  self._needs_list, self.ghost, self._spawned] + [self.wall_normal] * (self.config.wall_flux == "normal")
+        if self._owned is not None:
+            state.append(self.fields.owned)
         for a in state:
             into = self._gathered[a.dtype]
             wp.launch(self._passes.permute[a.dtype], dim=self.n, inputs=[order, a, into], device=self.device)
@@ -362,6 +370,8 @@ class Solver:
         self._maxima.zero_()
         self.boundary.before_forces(self, self.fields)
         self._forces(self.fields)
+        for hook in self._dt_hooks:
+            hook(self._maxima)
         wp.launch(k.choose_dt, dim=1, inputs=[p, self._maxima, self._fail, self._clock], device=dev)
         state, half, candidate = (self.pos, self.vel, self.rho), self._half, self._candidate
         if p.coarse_stride == 1:
@@ -376,7 +386,8 @@ class Solver:
             self._two_rates(state, half, candidate)
         wp.launch(k.check_particles, dim=n,
                   inputs=[p, self.pos, self._pos_c, self._vel_c, self._rho_c, self.mass, self.hsml, self.ptype,
-                          self.ids, self.solid_lo, self.solid_hi, self._fail, self._faulty, self._pending,
+                          self.ids, self.fields.owned, self.solid_lo, self.solid_hi, self._fail, self._faulty,
+                          self._pending,
                           self._pending_units], device=dev)
         wp.capture_if(self.flag(CENSUS_DUE), on_true=self._census)
         wp.launch(k.exclusion_check, dim=1, inputs=[p, self._clock, self._pending, self._pending_units,
@@ -485,7 +496,8 @@ class Solver:
         energy summed in a fixed order (sums.py)."""
         p, k, part = self.params, self._passes, self._sum64
         wp.launch(k.census, dim=part.count, inputs=[p, self._pos_c, self._vel_c, self._rho_c, self.mass, self.ptype,
-                                                    self.ids, self._clumped, self._faulty, self.solid_lo,
+                                                    self.ids, self.fields.owned, self._clumped, self._faulty,
+                                                    self.solid_lo,
                                                     self.solid_hi, self._energy_sum, self._clump_count,
                                                     *part.args()], device=self.device)
         part.total(self._energy_sum, health.ENERGY)
@@ -503,6 +515,13 @@ class Solver:
         only launch: it runs inside the step, where the host reads nothing."""
         self._step_hooks.append(hook)
         self._graph.drop()
+
+    def each_dt(self, hook):
+        """Call ``hook(maxima)`` in every step between its first force pass and the choice of its
+        size: ``maxima`` holds the largest |a| and |mu| the pass found (passes.choose_dt), and a rank
+        puts every rank's there (an all-reduce). The hook reads the device, so a solver with one
+        steps only with ``step``, as the host drives a rank's steps."""
+        self._dt_hooks.append(hook)
 
     @property
     def clock(self):
@@ -747,6 +766,9 @@ class Solver:
         ``reached`` tells.
         Raises HealthError when a step fails a check; the state is then the last healthy one.
         """
+        if self._dt_hooks:
+            raise RuntimeError("advance: a solver with an each_dt hook (a rank's) steps with step(), driven by the "
+                               "host")
         self._sync()
         if self.reached(t_target) or (interrupt is not None and interrupt()):
             # asked before the first step, as the eager loop asks: a replayed loop that reaches each

@@ -104,6 +104,7 @@ def build(scalar):
         clump_wall: scalar  # health.CLUMP_WALL_DX dx: no clumping counted closer to a wall
         clump_fraction: wp.float64
         n_fluid: int
+        ranked: int  # 1: the solver is one rank's, its halo in its slots too (Fields.owned); 0: one rank
         energy_slack: wp.float64  # energy_growth_ratio M g H; 0 = off
         move_limit2: scalar  # (0.9 x 2h)^2: the displacement check's limit, squared
         exclude: int  # 1: a fluid particle at fault is excluded; 0: it fails the run
@@ -128,5 +129,6 @@ def build(scalar):
         tau_off: wp.array(dtype=vec)  # xy, xz, yz
         wall_acc: wp.array(dtype=vec)  # a moving body's particles' acceleration (bodies.py); zero elsewhere
         wall_normal: wp.array(dtype=vec)  # a wall particle's face's inward unit normal (wall_flux normal; else 1 entry)
+        owned: wp.array(dtype=wp.int32)  # ranked: 1 where this rank owns the slot, 0 for its halo; else 1 entry
 
     return SimpleNamespace(Params=Params, Fields=Fields)
