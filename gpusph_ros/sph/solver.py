@@ -85,7 +85,7 @@ class Solver:
     """
 
     def __init__(self, config: SolverConfig, particles: Particles, max_neighbours: "int | None" = None,
-                 body_names: "list | None" = None, owned: "np.ndarray | None" = None):
+                 body_names: "list | None" = None, owned: "np.ndarray | None" = None, fluid: "tuple | None" = None):
         self.config = config.replace(device=chosen_device(config.device)).validate()
         # each body's name by id, for what a report says of it (the scene's obstacles)
         self.body_names = list(body_names) if body_names else [f"body {k}" for k in range(len(config.motions))]
@@ -102,8 +102,9 @@ class Solver:
         self._owned = None if owned is None else np.asarray(owned, dtype=bool).reshape(self.n)
         self._passes = passes.build(self.scalar)
         self.boundary = boundaries.model(cfg.boundary)
-        self._fluid_mass = float(particles.mass[particles.ptype == FLUID].sum())
-        self.n_fluid = int((particles.ptype == FLUID).sum())
+        # the fluid the health checks' shares are of: the whole run's (``fluid``: mass, particles) on a rank
+        self._fluid_mass = float(particles.mass[particles.ptype == FLUID].sum()) if fluid is None else float(fluid[0])
+        self.n_fluid = int((particles.ptype == FLUID).sum()) if fluid is None else int(fluid[1])
         spacing = particles.spacing if particles.spacing is not None else np.full(self.n, cfg.dx)
         if np.any(spacing <= 0.0) or np.any(spacing > cfg.dx * (1.0 + 1.0e-9)):
             raise ValueError(f"particles: spacings above 0 and at most dx = {cfg.dx:g} m (a refinement zone is "

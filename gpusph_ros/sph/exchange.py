@@ -1,0 +1,215 @@
+"""One run across MPI ranks: each rank steps its slab and a halo, and the ranks exchange what they own
+(issue 69; docs/ranks.md says why each choice is made).
+
+- **The cut.** Slabs of whole cells along the longest axis, one list radius wide
+  (decomposition.split), balanced on the particles at the start.
+- **The halo.** Each rank holds the particles within HALO_CELLS cells of its slab (SPS_HALO_CELLS
+  under SPS) besides its own. It steps them too, so that one exchange a step is enough
+  (tests/test_halo_depth.py). It neither checks nor counts them, and its maxima do not bound the
+  step (Solver's ``owned``).
+- **Each step, on every rank alike:**
+  - The lists are rebuilt where any rank's are stale or a reorder is due. Then, and only then,
+    particles change hands: every rank takes the particles now in its slab and halo, in the order of
+    their ids (`_migrate`). Between rebuilds a particle moves less than half the lists' skin, which the
+    halo's depth covers, so it keeps its owner until the next rebuild.
+  - The step's size takes every rank's maxima (an all-reduce in Solver.each_dt).
+  - A failure on any rank fails every rank.
+  - After the step, the owners' positions, velocities and densities overwrite the halo's (`_refresh`).
+    The staleness of the lists is then found again on the refreshed state.
+- **Bit for bit.** The particles are summed in the order of their ids whatever slots they stand in
+  (neighbours.cell_keys). A rank's local ids keep the order of the run's ids. The ranks rebuild their
+  lists at the steps one rank would. So a rank's particles step bit for bit as one rank's
+  (tests/test_ranks.py).
+
+What this first form leaves out, each refused by name (``supported``):
+- bodies, refinement zones and ``wall_flux: normal``: their state is kept by particle id across
+  the run;
+- the energy check, whose sum is not yet all-reduced (energy_growth_ratio is set to 0 on ranks).
+
+It also sends every owned particle to every rank, where only the particles near a cut need to go;
+docs/ranks.md prices what the neighbours alone would send.
+"""
+import numpy as np
+
+from .config import ConfigError
+from .decomposition import split
+from .health import HealthError
+from .neighbours import list_skin
+from .particles import Particles
+from .solver import Solver
+from .state import REORDER_DUE, VACANT
+
+HALO_CELLS, SPS_HALO_CELLS = 3, 4  # measured: tests/test_halo_depth.py
+ROOM = 1.5  # slots a rank keeps over its first particle count: a flow brings it more than it starts with
+
+
+def supported(model) -> None:
+    """ConfigError naming what a run on ranks cannot take yet (the module's docstring)."""
+    cfg = model.config
+    if cfg.motions:
+        raise ConfigError("ranks", "bodies", "a scene without bodies on more than one rank (not built yet)")
+    if cfg.zones:
+        raise ConfigError("ranks", "refine", "a scene without refinement zones on more than one rank (not built yet)")
+    if cfg.wall_flux != "full":
+        raise ConfigError("wall_flux", cfg.wall_flux, "full on more than one rank (not built yet)")
+
+
+class RankedRun:
+    """This rank's part of a run of ``model`` (scenes.build.Model) on ``comm``'s ranks: its solver
+    (``solver``), which particles it holds (``gid``: the run's id of each local id) and which it owns."""
+
+    def __init__(self, model, comm):
+        from mpi4py import MPI
+
+        supported(model)
+        self.comm, self._max = comm, MPI.MAX
+        cfg = model.config.replace(energy_growth_ratio=0.0)
+        p = model.particles
+        spacing = p.spacing if p.spacing is not None else np.full(len(p), cfg.dx)
+        tank = [*model.scene.tank, 0.0, 0.0][:3]  # a 2D tank's third axis is none to cut along
+        self.slabs = split(p.pos, (0.0, 0.0, 0.0), tank, cfg.periodic, list_skin() * 2.0 * cfg.h, comm.size)
+        self.depth = SPS_HALO_CELLS if cfg.viscosity == "sps" else HALO_CELLS
+        self.first, self.end = self.slabs.bounds()[comm.rank]
+        fluid = p.ptype == 0
+        members, owned = self._members(p.pos, np.arange(len(p)))
+        self.capacity = int(np.ceil(ROOM * len(members))) + 8
+        records = {"pos": p.pos, "vel": p.vel, "rho": p.rho, "mass": p.mass, "ptype": p.ptype, "body": p.body,
+                   "spacing": spacing}
+        part = self._particles({k: v[members] for k, v in records.items()})
+        self.gid = self._padded(members, -1)  # the run's id of each local id; -1: a vacant slot
+        self.solver = Solver(cfg, part, owned=self._padded(owned, False),
+                             fluid=(float(p.mass[fluid].sum()), int(fluid.sum())))
+        self.solver.each_dt(self._all_maxima)
+        # mDBC's ghost-node offsets, found once from the walls' places (boundaries/faces.py): a wall
+        # particle's stays its own as the slots are rewritten
+        self._ghost = dict(zip(members.tolist(), self.solver.ghost.numpy()[:len(members)].copy()))
+
+    # -- who holds what ----------------------------------------------------------------------
+    def _members(self, pos: np.ndarray, gid: np.ndarray) -> tuple:
+        """The run's ids this rank holds among ``gid`` at ``pos`` (in id order) and which it owns."""
+        cell = self.slabs.cell_of(pos)
+        n = self.slabs.n_cells
+        below = np.mod(self.first - cell, n) if self.slabs.periodic else self.first - cell
+        above = np.mod(cell - self.end + 1, n) if self.slabs.periodic else cell - self.end + 1
+        own = (cell >= self.first) & (cell < self.end)
+        near = own | ((below > 0) & (below <= self.depth)) | ((above > 0) & (above <= self.depth))
+        order = np.argsort(gid[near], kind="stable")
+        return gid[near][order], own[near][order]
+
+    def _padded(self, values: np.ndarray, fill) -> np.ndarray:
+        out = np.full(self.capacity, fill, dtype=np.asarray(values).dtype)
+        out[:len(values)] = values
+        return out
+
+    def _particles(self, rec: dict) -> Particles:
+        """The rank's particles, local id k the k-th of ``rec``, then vacant slots up to capacity (a
+        vacant slot is read by no pass and sorts past every cell)."""
+        pad = self.capacity - len(rec["pos"])
+        return Particles(pos=np.vstack([rec["pos"], np.zeros((pad, 3))]),
+                         vel=np.vstack([rec["vel"], np.zeros((pad, 3))]),
+                         rho=np.concatenate([rec["rho"], np.ones(pad)]),
+                         mass=np.concatenate([rec["mass"], np.zeros(pad)]),
+                         ptype=np.concatenate([rec["ptype"], np.full(pad, VACANT)]).astype(np.int32),
+                         body=np.concatenate([rec["body"], np.full(pad, -1)]).astype(np.int32),
+                         spacing=np.concatenate([rec["spacing"], np.full(pad, float(rec["spacing"].max()))]))
+
+    # -- the collectives ------------------------------------------------------------------------
+    def _all_maxima(self, maxima):
+        m = maxima.numpy()
+        local = np.array([m[0::2].max(), m[1::2].max()], dtype=np.float64)
+        every = np.empty_like(local)
+        self.comm.Allreduce(local, every, op=self._max)
+        m[:] = 0.0
+        m[0], m[1] = every
+        maxima.assign(m)
+
+    def _owned_records(self, keys) -> dict:
+        """Every rank's owned particles: ``keys`` of their state and their run ids, gathered."""
+        s = self.solver
+        ids = s.ids.numpy()
+        mine = np.flatnonzero(s.fields.owned.numpy().astype(bool) & (s.ptype.numpy() != VACANT))
+        local = {"gid": self.gid[ids[mine]]}
+        for k in keys:
+            local[k] = getattr(s, k).numpy()[mine]
+        parts = self.comm.allgather(local)
+        return {k: np.concatenate([q[k] for q in parts]) for k in local}
+
+    # -- the step -------------------------------------------------------------------------------
+    def step(self) -> float:
+        s = self.solver
+        stale = self.comm.allreduce(int(s.neighbours.stale.numpy()[0]), op=self._max)
+        if stale or int(s.flag(REORDER_DUE).numpy()[0]):
+            self._migrate()
+            if stale:
+                s.neighbours.stale.fill_(1)
+        failed = ""
+        try:
+            s.step()
+        except HealthError as err:
+            failed = str(err)
+        why = self.comm.allgather(failed)
+        if any(why):
+            raise HealthError("; ".join(f"rank {r}: {w}" for r, w in enumerate(why) if w))
+        self._refresh()
+        return s.time
+
+    def _refresh(self):
+        """The halo's positions, velocities and densities from their owners; the lists' staleness
+        found again on them (the step found it on the halo before this)."""
+        s = self.solver
+        every = self._owned_records(("pos", "vel", "rho"))
+        order = np.argsort(every["gid"])
+        ids = s.ids.numpy()
+        held = s.ptype.numpy() != VACANT
+        owned = s.fields.owned.numpy().astype(bool)
+        halo = np.flatnonzero(held & ~owned)
+        at = order[np.searchsorted(every["gid"], self.gid[ids[halo]], sorter=order)]
+        for k in ("pos", "vel", "rho"):
+            a = getattr(s, k).numpy()
+            a[halo] = every[k][at]
+            getattr(s, k).assign(a)
+        s.neighbours.stale.zero_()
+        s.neighbours.moved(s.pos, s.vel, s.clock)
+
+    def _migrate(self):
+        """Every rank takes the particles now in its slab and halo (the module's docstring)."""
+        s = self.solver
+        every = self._owned_records(("pos", "vel", "rho", "mass", "ptype", "body", "hsml"))
+        members, owned = self._members(every["pos"], every["gid"])
+        at = np.searchsorted(every["gid"], members, sorter=np.argsort(every["gid"]))
+        at = np.argsort(every["gid"])[at]
+        m = len(members)
+        if m > self.capacity:
+            raise RuntimeError(f"rank {self.comm.rank}: {m} particles, more than its {self.capacity} slots")
+        hdx = s.config.hdx
+        fields = {"pos": every["pos"][at], "vel": every["vel"][at], "rho": every["rho"][at],
+                  "mass": every["mass"][at], "ptype": every["ptype"][at], "body": every["body"][at],
+                  "hsml": every["hsml"][at]}
+        vacant = {"pos": np.zeros(3), "vel": np.zeros(3), "rho": 1.0, "mass": 0.0, "ptype": VACANT, "body": -1,
+                  "hsml": hdx * s.config.dx}
+        for k, values in fields.items():
+            a = getattr(s, k).numpy()
+            a[:m] = values
+            a[m:] = vacant[k]
+            getattr(s, k).assign(a)
+        s.ids.assign(np.arange(self.capacity, dtype=np.int32))
+        s.fields.owned.assign(self._padded(owned.astype(np.int32), 0))
+        needs = np.isin(fields["ptype"], (0,)) | s.boundary.volume | (fields["body"] >= 0)
+        needs &= fields["ptype"] != VACANT
+        s._needs_list.assign(self._padded(needs.astype(np.int32), 0))
+        ghost = s.ghost.numpy()
+        ghost[:] = 0.0
+        for k, g in enumerate(members):
+            if int(g) in self._ghost and fields["ptype"][k] != 0:
+                ghost[k] = self._ghost[int(g)]
+        s.ghost.assign(ghost)
+        self.gid = self._padded(members, -1)
+        s.neighbours.stale.fill_(1)
+
+    def gather(self, keys=("pos", "vel", "rho")) -> "dict | None":
+        """Rank 0: the owned particles' ``keys`` in the solver's precision, by run id; None elsewhere."""
+        every = self._owned_records(keys)
+        if self.comm.rank != 0:
+            return None
+        order = np.argsort(every["gid"])
+        return {k: every[k][order] for k in ("gid", *keys)}

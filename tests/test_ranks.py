@@ -1,0 +1,77 @@
+"""One run on 2 and 3 MPI ranks steps bit for bit as on one (sph/exchange.py, issue 69 item 2).
+
+Each case runs under ``mpiexec -n N python -m mpi4py tests/ranks_run.py``, the venv's MPICH. A rank
+that raises ends the whole job (mpi4py's runner), so a failure cannot hang the suite. Rank 0 saves
+the owned particles' positions, velocities and densities, in the solver's precision, with each
+step's time. The same scene steps as many times on one solver here (the energy check off, as on
+ranks). The comparison:
+- every particle is owned by exactly one rank (the ids are the run's, once each);
+- every step ends at the same time;
+- the state is equal bit for bit.
+
+The cases:
+- the 2D collapse at 4 mm (the surge crosses both cuts);
+- the collapse under mDBC with shifting, and under SPS (its halo a cell deeper);
+- a collapse in a tank periodic along the cut axis (the water crosses the period and the first and
+  last ranks meet across it);
+- DamBreak 1 at 5 cm in 3D.
+"""
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from gpusph_ros.scenes.build import build_run
+from gpusph_ros.scenes.schema import load_scene
+from gpusph_ros.scenes.settings import resolve
+
+pytest.importorskip("mpi4py")
+pytestmark = pytest.mark.physics
+
+HERE = Path(__file__).parent
+MPIEXEC = Path(sys.executable).parent / "mpiexec"
+PERIODIC = {"name": "periodic_collapse", "dim": 2, "tank": [0.6, 0.3], "periodic": [True, False],
+            "walls": "particles", "fluid": [{"name": "water", "lo": [0.0, 0.0], "hi": [0.15, 0.15]}]}
+
+
+def _one_rank(scene, dx: float, steps: int, sets: list) -> dict:
+    sc = load_scene(scene)
+    solver = build_run(sc, resolve(sc, sets=sets, dx=dx, end_time=10.0, energy_growth_ratio=0.0)).solver()
+    times = [solver.step() for _ in range(steps)]
+    slot = np.empty(solver.n, dtype=np.int64)
+    slot[solver.ids.numpy()] = np.arange(solver.n)
+    return {"times": np.array(times), **{k: getattr(solver, k).numpy()[slot] for k in ("pos", "vel", "rho")}}
+
+
+def _on_ranks(ranks: int, scene, dx: float, steps: int, sets: list, out: Path) -> dict:
+    env = {**os.environ, "OMP_NUM_THREADS": "1"}
+    done = subprocess.run([str(MPIEXEC), "-n", str(ranks), sys.executable, "-m", "mpi4py", str(HERE / "ranks_run.py"),
+                           str(out), str(scene), str(dx), str(steps), *sets], capture_output=True, text=True,
+                          timeout=300, env=env)
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
+    return dict(np.load(out))
+
+
+@pytest.mark.parametrize("scene, dx, steps, sets, ranks", [
+    ("collapse_2d", 0.004, 300, [], (2, 3)),
+    ("collapse_2d", 0.004, 200, ["boundary=mdbc", "shifting=true"], (2,)),
+    ("collapse_2d", 0.004, 200, ["viscosity=sps"], (3,)),
+    ("periodic", 0.005, 250, [], (3,)),
+    ("dambreak1_lab", 0.05, 100, [], (2,)),
+])
+def test_a_run_on_ranks_steps_bit_for_bit_as_on_one(scene, dx, steps, sets, ranks, tmp_path):
+    if scene == "periodic":
+        scene = tmp_path / "periodic.yaml"
+        scene.write_text(yaml.safe_dump(PERIODIC))
+    one = _one_rank(scene, dx, steps, sets)
+    assert np.abs(one["vel"]).max() > 0.3  # the water moves
+    for n in ranks:
+        many = _on_ranks(n, scene, dx, steps, sets, tmp_path / f"ranks{n}.npz")
+        assert np.array_equal(many["gid"], np.arange(len(one["pos"]))), n
+        assert np.array_equal(many["times"], one["times"]), n
+        for key in ("pos", "vel", "rho"):
+            assert many[key].dtype == one[key].dtype and np.array_equal(many[key], one[key]), (n, key)
