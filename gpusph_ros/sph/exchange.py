@@ -29,6 +29,8 @@ What this first form leaves out, each refused by name (``supported``):
 It also sends every owned particle to every rank, where only the particles near a cut need to go;
 docs/ranks.md prices what the neighbours alone would send.
 """
+import time
+
 import numpy as np
 
 from .config import ConfigError
@@ -80,6 +82,7 @@ class RankedRun:
         self.solver = Solver(cfg, part, owned=self._padded(owned, False),
                              fluid=(float(p.mass[fluid].sum()), int(fluid.sum())))
         self.solver.each_dt(self._all_maxima)
+        self.exchange_s = 0.0  # wall time in the exchange (hands changed, the halo refreshed), for bench/ranks.py
         # mDBC's ghost-node offsets, found once from the walls' places (boundaries/faces.py): a wall
         # particle's stays its own as the slots are rewritten
         self._ghost = dict(zip(members.tolist(), self.solver.ghost.numpy()[:len(members)].copy()))
@@ -137,11 +140,13 @@ class RankedRun:
     # -- the step -------------------------------------------------------------------------------
     def step(self) -> float:
         s = self.solver
+        start = time.perf_counter()
         stale = self.comm.allreduce(int(s.neighbours.stale.numpy()[0]), op=self._max)
         if stale or int(s.flag(REORDER_DUE).numpy()[0]):
             self._migrate()
             if stale:
                 s.neighbours.stale.fill_(1)
+        self.exchange_s += time.perf_counter() - start
         failed = ""
         try:
             s.step()
@@ -150,7 +155,9 @@ class RankedRun:
         why = self.comm.allgather(failed)
         if any(why):
             raise HealthError("; ".join(f"rank {r}: {w}" for r, w in enumerate(why) if w))
+        start = time.perf_counter()
         self._refresh()
+        self.exchange_s += time.perf_counter() - start
         return s.time
 
     def _refresh(self):
