@@ -4,7 +4,7 @@ host, so that a spacing a thousand times too fine is refused with the numbers in
 exhausting the machine.
 
 Memory per particle (measured with ``Solver.device_bytes`` on DamBreak 1 and the 2D collapse, and
-checked by the tests): 54 scalars of state, half-step, candidate and scratch arrays plus 52 bytes of
+checked by the tests): 54 scalars of state, half-step, candidate and scratch arrays plus 56 bytes of
 integers, and what the neighbour search holds (``config.cell_walks``): with lists, the list, 4 bytes
 x ``default_max_neighbours`` (248 in 3D, 72 in 2D at h = 1.3 dx: the most a run's lists may widen
 to; the solver measures its own, narrower at the start, sph/neighbours.py), its count and the sorted
@@ -23,7 +23,7 @@ from ..sph.neighbours import default_max_neighbours
 from .boxes import cells
 
 HOST_BYTES = 200  # numpy arrays of the particle set and the lattice fills, per particle
-_SCALARS, _INTEGER_BYTES = 54, 52
+_SCALARS, _INTEGER_BYTES = 54, 56
 _LIST_SCALARS, _LIST_INTEGER_BYTES = 4, 8  # the sorted positions and h, the sorted kinds and the count
 _WALK_SCALARS, _WALK_INTEGER_BYTES = 1, 8  # h, the kinds and the needs as of the sort
 _STRESS = 6  # of the scalars: the SPS stress, held only under viscosity sps
