@@ -57,11 +57,11 @@ def _on_ranks(ranks: int, scene, dx: float, steps: int, sets: list, out: Path) -
 
 
 @pytest.mark.parametrize("scene, dx, steps, sets, ranks", [
-    ("collapse_2d", 0.004, 300, [], (2, 3)),
+    ("collapse_2d", 0.004, 250, [], (2, 3)),
     ("collapse_2d", 0.004, 200, ["boundary=mdbc", "shifting=true"], (2,)),
     ("collapse_2d", 0.004, 200, ["viscosity=sps"], (3,)),
-    ("periodic", 0.005, 250, [], (3,)),
-    ("dambreak1_lab", 0.05, 100, [], (2,)),
+    ("periodic", 0.005, 200, [], (3,)),
+    ("dambreak1_lab", 0.05, 80, [], (2,)),
 ])
 def test_a_run_on_ranks_steps_bit_for_bit_as_on_one(scene, dx, steps, sets, ranks, tmp_path):
     if scene == "periodic":

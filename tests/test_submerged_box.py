@@ -2,9 +2,9 @@
 (scenes.exact.submerged_box; issue 68, item 3; bench/submerged_box.py, docs/results/submerged_box.md).
 
 - Still water, 0.2 m deep, the box's top 0.1 m under the surface, at 2.5 cm (the box's height and
-  the depth whole spacings), settled for 0.5 s: the sensors on the box's top (at its centre and one
-  diameter from its edge) read rho g d within 2% and the floor's rho g d within 2% (+1.4%, +1.4%,
-  +1.3% measured), and no fluid particle is below -50 Pa (the lowest +144 Pa).
+  the depth whole spacings), settled for 0.5 s and read at 0.55 and 0.6 s: the sensors on the box's
+  top (at its centre and one diameter from its edge) read rho g d within 2% and the floor's rho g d
+  within 2% (+1.4%, +1.4%, +1.3% measured), and no fluid particle is below -50 Pa (the lowest +144 Pa).
 - A current of 0.3 m/s along x (the tank periodic that way, the water started at that speed; Froude
   number 0.21): no fluid particle below -50 Pa (the lowest +116 Pa measured); the top's sensors
   within rho U^2 (90 Pa, 9% of the still rho g d) of it, the Bernoulli drop of a speed up to sqrt(2)
@@ -44,8 +44,8 @@ def _run(current: float, start: float, end: float):
 
 
 def test_still_water_over_a_box_reads_rho_g_d_on_its_top_and_holds_no_tension():
-    readings, lowest, rho_g = _run(0.0, 0.5, 0.65)
-    assert len(readings) == 3
+    readings, lowest, rho_g = _run(0.0, 0.5, 0.6)
+    assert len(readings) == 2
     for name, depth in [*((top, BOX_DEPTH - BOX_HI[2]) for top in TOPS), ("floor", BOX_DEPTH)]:
         mean = np.mean([r[name] for r in readings])
         assert abs(mean / (rho_g * depth) - 1.0) <= 0.02, (name, mean)
@@ -54,7 +54,7 @@ def test_still_water_over_a_box_reads_rho_g_d_on_its_top_and_holds_no_tension():
 
 def test_a_box_under_a_gentle_current_holds_no_tension():
     u = 0.3
-    readings, lowest, rho_g = _run(u, 0.3, 0.45)
+    readings, lowest, rho_g = _run(u, 0.3, 0.4)
     assert lowest >= -50.0
     still = rho_g * (BOX_DEPTH - BOX_HI[2])
     for name in TOPS:
