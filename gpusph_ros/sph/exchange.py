@@ -21,13 +21,14 @@
   lists at the steps one rank would. So a rank's particles step bit for bit as one rank's
   (tests/test_ranks.py).
 
-What this first form leaves out, each refused by name (``supported``):
-- bodies, refinement zones and ``wall_flux: normal``: their state is kept by particle id across
-  the run;
-- the energy check, whose sum is not yet all-reduced (energy_growth_ratio is set to 0 on ranks).
+What this first form leaves out:
+- bodies, refinement zones and ``wall_flux: normal``, refused by name (``supported``): their state
+  is kept by particle id across the run;
+- the energy check, whose sum is not yet all-reduced: energy_growth_ratio is 0 on ranks.
 
-It also sends every owned particle to every rank, where only the particles near a cut need to go;
-docs/ranks.md prices what the neighbours alone would send.
+Each rank sends every other rank the owned particles within ``depth`` + 1 cells of its slab's ends
+(an all-gather): the neighbours alone need them, and a point-to-point exchange with each neighbour
+would send less where there are many ranks.
 """
 import time
 
@@ -126,14 +127,30 @@ class RankedRun:
         m[0], m[1] = every
         maxima.assign(m)
 
-    def _owned_records(self, keys) -> dict:
-        """Every rank's owned particles: ``keys`` of their state and their run ids, gathered."""
+    def _held(self, keys, owned_only: bool, near_ends: bool = False) -> dict:
+        """This rank's particles (its owned ones only where ``owned_only``): ``keys`` of their state
+        and their run ids. ``near_ends``: only those within ``depth`` + 1 cells of its slab's ends or
+        outside it, the only ones another rank's halo can hold until the next rebuild (a particle
+        moves less than a cell between rebuilds)."""
         s = self.solver
         ids = s.ids.numpy()
-        mine = np.flatnonzero(s.fields.owned.numpy().astype(bool) & (s.ptype.numpy() != VACANT))
+        keep = s.ptype.numpy() != VACANT
+        if owned_only:
+            keep &= s.fields.owned.numpy().astype(bool)
+        if near_ends:
+            cell = self.slabs.cell_of(s.pos.numpy())
+            n = self.slabs.n_cells
+            inner = np.mod(cell - self.first, n) if self.slabs.periodic else cell - self.first
+            deep = (inner > self.depth) & (inner < self.end - self.first - 1 - self.depth)
+            keep &= ~deep
+        mine = np.flatnonzero(keep)
         local = {"gid": self.gid[ids[mine]]}
         for k in keys:
             local[k] = getattr(s, k).numpy()[mine]
+        return local
+
+    def _gathered(self, local: dict) -> dict:
+        """``local`` of every rank, concatenated."""
         parts = self.comm.allgather(local)
         return {k: np.concatenate([q[k] for q in parts]) for k in local}
 
@@ -164,7 +181,7 @@ class RankedRun:
         """The halo's positions, velocities and densities from their owners; the lists' staleness
         found again on them (the step found it on the halo before this)."""
         s = self.solver
-        every = self._owned_records(("pos", "vel", "rho"))
+        every = self._gathered(self._held(("pos", "vel", "rho"), owned_only=True, near_ends=True))
         order = np.argsort(every["gid"])
         ids = s.ids.numpy()
         held = s.ptype.numpy() != VACANT
@@ -181,7 +198,14 @@ class RankedRun:
     def _migrate(self):
         """Every rank takes the particles now in its slab and halo (the module's docstring)."""
         s = self.solver
-        every = self._owned_records(("pos", "vel", "rho", "mass", "ptype", "body", "hsml"))
+        keys = ("pos", "vel", "rho", "mass", "ptype", "body", "hsml")
+        # what it holds (its halo refreshed after the last step) and what the others hold near their
+        # ends: every particle that can be in its slab or halo now
+        near = self._gathered(self._held(keys, owned_only=True, near_ends=True))
+        here = self._held(keys, owned_only=False)
+        both = {k: np.concatenate([near[k], here[k]]) for k in near}
+        _, first = np.unique(both["gid"], return_index=True)
+        every = {k: v[first] for k, v in both.items()}
         members, owned = self._members(every["pos"], every["gid"])
         at = np.searchsorted(every["gid"], members, sorter=np.argsort(every["gid"]))
         at = np.argsort(every["gid"])[at]
@@ -215,7 +239,7 @@ class RankedRun:
 
     def gather(self, keys=("pos", "vel", "rho")) -> "dict | None":
         """Rank 0: the owned particles' ``keys`` in the solver's precision, by run id; None elsewhere."""
-        every = self._owned_records(keys)
+        every = self._gathered(self._held(keys, owned_only=True))
         if self.comm.rank != 0:
             return None
         order = np.argsort(every["gid"])
