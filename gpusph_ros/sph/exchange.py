@@ -84,9 +84,11 @@ class RankedRun:
                              fluid=(float(p.mass[fluid].sum()), int(fluid.sum())))
         self.solver.each_dt(self._all_maxima)
         self.exchange_s = 0.0  # wall time in the exchange (hands changed, the halo refreshed), for bench/ranks.py
-        # mDBC's ghost-node offsets, found once from the walls' places (boundaries/faces.py): a wall
-        # particle's stays its own as the slots are rewritten
-        self._ghost = dict(zip(members.tolist(), self.solver.ghost.numpy()[:len(members)].copy()))
+        # mDBC's ghost-node offsets by run id, each a wall particle's own geometry (boundaries/faces.py),
+        # found once: a wall particle's stays its own as the slots are rewritten
+        ghost = self.solver.ghost.numpy()
+        self._ghost = np.zeros((len(p), 3), dtype=ghost.dtype)
+        self._ghost[members] = ghost[:len(members)]
 
     # -- who holds what ----------------------------------------------------------------------
     def _members(self, pos: np.ndarray, gid: np.ndarray) -> tuple:
@@ -228,11 +230,8 @@ class RankedRun:
         needs = np.isin(fields["ptype"], (0,)) | s.boundary.volume | (fields["body"] >= 0)
         needs &= fields["ptype"] != VACANT
         s._needs_list.assign(self._padded(needs.astype(np.int32), 0))
-        ghost = s.ghost.numpy()
-        ghost[:] = 0.0
-        for k, g in enumerate(members):
-            if int(g) in self._ghost and fields["ptype"][k] != 0:
-                ghost[k] = self._ghost[int(g)]
+        ghost = np.zeros((self.capacity, 3), dtype=self._ghost.dtype)
+        ghost[:m] = np.where((fields["ptype"] != 0)[:, None], self._ghost[members], 0.0)
         s.ghost.assign(ghost)
         self.gid = self._padded(members, -1)
         s.neighbours.stale.fill_(1)
