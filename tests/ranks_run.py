@@ -1,9 +1,11 @@
 """Run under mpiexec by tests/test_ranks.py: a scene stepped on every rank (sph/exchange.py), its
-owned particles' state gathered to rank 0 and saved.
+owned particles' state gathered to rank 0 and saved with each step's time and how often the slabs
+were cut again.
 
-    mpiexec -n N python tests/ranks_run.py OUT.npz SCENE DX STEPS [KEY=VALUE ...]
+    mpiexec -n N python -m mpi4py tests/ranks_run.py OUT.npz SCENE DX STEPS [KEY=VALUE ...]
+        [--rebalance FRACTION] [--every STEPS]
 """
-import sys
+import argparse
 
 import numpy as np
 import warp as wp
@@ -11,7 +13,15 @@ from mpi4py import MPI
 
 
 def main():
-    out, scene, dx, steps, *sets = sys.argv[1:]
+    ap = argparse.ArgumentParser()
+    ap.add_argument("out")
+    ap.add_argument("scene")
+    ap.add_argument("dx", type=float)
+    ap.add_argument("steps", type=int)
+    ap.add_argument("sets", nargs="*")
+    ap.add_argument("--rebalance", type=float, default=0.1)
+    ap.add_argument("--every", type=int, default=100)
+    args = ap.parse_args()
     wp.config.log_level = wp.LOG_WARNING
     wp.config.quiet = True
     from gpusph_ros.scenes.build import build_run
@@ -19,13 +29,16 @@ def main():
     from gpusph_ros.scenes.settings import resolve
     from gpusph_ros.sph.exchange import RankedRun
 
-    sc = load_scene(scene)
-    model = build_run(sc, resolve(sc, sets=sets, dx=float(dx), end_time=10.0))
-    run = RankedRun(model, MPI.COMM_WORLD)
-    times = [run.step() for _ in range(int(steps))]
+    sc = load_scene(args.scene)
+    model = build_run(sc, resolve(sc, sets=args.sets, dx=args.dx, end_time=10.0))
+    run = RankedRun(model, MPI.COMM_WORLD, rebalance=args.rebalance, rebalance_every=args.every)
+    cuts = [run.slabs.cuts]
+    times = [run.step() for _ in range(args.steps)]
+    cuts.append(run.slabs.cuts)
     state = run.gather()
     if state is not None:
-        np.savez(out, times=np.array(times), **state)
+        np.savez(args.out, times=np.array(times), recuts=run.recuts, first_cuts=np.array(cuts[0]),
+                 last_cuts=np.array(cuts[-1]), **state)
 
 
 if __name__ == "__main__":

@@ -84,8 +84,11 @@ class Slabs:
         """The same cells cut for ``ranks`` ranks (as many as now by default) where the particles at
         ``pos`` balance (``split``): each cut on the face nearest its share, every slab at least
         MIN_CELLS across. A rebalance moves the cuts by whole cells and keeps the cells."""
-        ranks = self.ranks if ranks is None else ranks
-        below = _below(self, pos, spread)
+        return self.cut_at(_below(self, pos, spread), self.ranks if ranks is None else ranks)
+
+    def cut_at(self, below: np.ndarray, ranks: int) -> "Slabs":
+        """The same cells cut for ``ranks`` ranks from ``below``, the particles below each cell face
+        (n_cells + 1 of them; ranks count their own and add them up): ``recut``."""
         cuts, first = [], 0
         for r in range(1, ranks):
             faces = np.arange(first + MIN_CELLS, self.n_cells - (ranks - r) * MIN_CELLS + 1)

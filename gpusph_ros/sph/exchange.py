@@ -61,11 +61,11 @@ class RankedRun:
     """This rank's part of a run of ``model`` (scenes.build.Model) on ``comm``'s ranks: its solver
     (``solver``), which particles it holds (``gid``: the run's id of each local id) and which it owns."""
 
-    def __init__(self, model, comm):
+    def __init__(self, model, comm, rebalance: float = 0.1, rebalance_every: int = 100):
         from mpi4py import MPI
 
         supported(model)
-        self.comm, self._max = comm, MPI.MAX
+        self.comm, self._max, self._sum = comm, MPI.MAX, MPI.SUM
         cfg = model.config.replace(energy_growth_ratio=0.0)
         p = model.particles
         spacing = p.spacing if p.spacing is not None else np.full(len(p), cfg.dx)
@@ -83,6 +83,10 @@ class RankedRun:
         self.solver = Solver(cfg, part, owned=self._padded(owned, False),
                              fluid=(float(p.mass[fluid].sum()), int(fluid.sum())))
         self.solver.each_dt(self._all_maxima)
+        # a change of hands recuts the slabs where the fullest rank owns more than ``rebalance`` over
+        # the mean, at most every ``rebalance_every`` steps (issue 69 item 3)
+        self.rebalance, self.rebalance_every, self._recut_at = rebalance, rebalance_every, 0
+        self.recuts = 0
         self.exchange_s = 0.0  # wall time in the exchange (hands changed, the halo refreshed), for bench/ranks.py
         # mDBC's ghost-node offsets by run id, each a wall particle's own geometry (boundaries/faces.py),
         # found once: a wall particle's stays its own as the slots are rewritten
@@ -162,6 +166,7 @@ class RankedRun:
         start = time.perf_counter()
         stale = self.comm.allreduce(int(s.neighbours.stale.numpy()[0]), op=self._max)
         if stale or int(s.flag(REORDER_DUE).numpy()[0]):
+            self._balance()
             self._migrate()
             if stale:
                 s.neighbours.stale.fill_(1)
@@ -178,6 +183,28 @@ class RankedRun:
         self._refresh()
         self.exchange_s += time.perf_counter() - start
         return s.time
+
+    def _balance(self):
+        """The slabs cut again from every rank's owned particles per cell, the same on every rank,
+        where they have drifted past ``rebalance``: the cells stay, the cuts move by whole cells, and
+        the change of hands that follows moves the particles."""
+        s = self.solver
+        if self.rebalance <= 0.0 or s.steps < self._recut_at + self.rebalance_every:
+            return
+        mine = self._held(("pos",), owned_only=True)["pos"]
+        local = np.bincount(self.slabs.cell_of(mine), minlength=self.slabs.n_cells).astype(np.int64)
+        counts = np.empty_like(local)
+        self.comm.Allreduce(local, counts, op=self._sum)
+        below = np.concatenate([[0], np.cumsum(counts)])
+        owned = np.array([below[end] - below[first] for first, end in self.slabs.bounds()])
+        if owned.max() <= (1.0 + self.rebalance) * owned.mean():
+            return
+        self._recut_at = s.steps  # tried: not again for rebalance_every steps, moved or not
+        cut = self.slabs.cut_at(below, self.comm.size)
+        if cut.cuts != self.slabs.cuts:  # whole cells may balance no better than they do
+            self.slabs = cut
+            self.first, self.end = cut.bounds()[self.comm.rank]
+            self.recuts += 1
 
     def _refresh(self):
         """The halo's positions, velocities and densities from their owners; the lists' staleness
