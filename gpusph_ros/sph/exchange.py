@@ -236,8 +236,7 @@ class RankedRun:
         _, first = np.unique(both["gid"], return_index=True)
         every = {k: v[first] for k, v in both.items()}
         members, owned = self._members(every["pos"], every["gid"])
-        at = np.searchsorted(every["gid"], members, sorter=np.argsort(every["gid"]))
-        at = np.argsort(every["gid"])[at]
+        at = np.searchsorted(every["gid"], members)  # np.unique left ``every`` in id order
         m = len(members)
         if m > self.capacity:
             raise RuntimeError(f"rank {self.comm.rank}: {m} particles, more than its {self.capacity} slots")
@@ -254,9 +253,7 @@ class RankedRun:
             getattr(s, k).assign(a)
         s.ids.assign(np.arange(self.capacity, dtype=np.int32))
         s.fields.owned.assign(self._padded(owned.astype(np.int32), 0))
-        needs = np.isin(fields["ptype"], (0,)) | s.boundary.volume | (fields["body"] >= 0)
-        needs &= fields["ptype"] != VACANT
-        s._needs_list.assign(self._padded(needs.astype(np.int32), 0))
+        s._needs_list.assign(self._padded(s.needs_list(fields["ptype"], fields["body"]), 0))
         ghost = np.zeros((self.capacity, 3), dtype=self._ghost.dtype)
         ghost[:m] = np.where((fields["ptype"] != 0)[:, None], self._ghost[members], 0.0)
         s.ghost.assign(ghost)

@@ -183,9 +183,7 @@ class Solver:
         # by continuity; mDBC's list holds the fluid near the ghost node too) or to sum a body force; a
         # refinement level's vacant slot none until it holds a daughter (levels.spawn): searching for
         # its 21,000 slots took a quarter of DamBreak 1's zoned list builds
-        needs = np.isin(particles.ptype, (FLUID, PASSIVE)) | (particles.body >= 0) | self.boundary.volume
-        needs &= particles.ptype != VACANT
-        self._needs_list = arr(needs.astype(np.int32), wp.int32)
+        self._needs_list = arr(self.needs_list(particles.ptype, particles.body), wp.int32)
         self.ghost = wp.zeros(n, dtype=v, device=dev)  # mDBC's ghost-node offsets (boundaries/mdbc.py); else zero
         self._spawned = wp.zeros(n, dtype=wp.int32, device=dev)  # refinement levels: which fluid has daughters
         # the reorder's scratch, one array of each type the state holds (passes.permute)
@@ -291,6 +289,12 @@ class Solver:
             wp.launch(levels.build(s).mark_spawned, dim=n, inputs=[self.params, self.pos, self.hsml, self.ptype,
                                                                    self._zone_lo, self._zone_hi, self._zone_h,
                                                                    self._spawned], device=dev)
+
+    def needs_list(self, ptype: np.ndarray, body: np.ndarray) -> np.ndarray:
+        """Which particles of kinds ``ptype`` on bodies ``body`` keep a neighbour list (1) under this
+        solver's boundary model (_allocate says why; exchange.py rewrites a rank's slots by it)."""
+        needs = np.isin(ptype, (FLUID, PASSIVE)) | (body >= 0) | self.boundary.volume
+        return (needs & (ptype != VACANT)).astype(np.int32)
 
     def _make_fields(self, pos, vel, rho, shared: dict):
         f = self._passes.Fields()
