@@ -77,7 +77,10 @@ class Slabs:
 
     def counts(self, pos: np.ndarray, spread: float = 0.0) -> np.ndarray:
         """The particles each rank owns (``split``'s ``spread``: each spread over that length)."""
-        below = _below(self, pos, spread)
+        return self.per_rank(_below(self, pos, spread))
+
+    def per_rank(self, below: np.ndarray) -> np.ndarray:
+        """The particles each rank's cells hold, from ``below``, the particles below each cell face."""
         return np.array([below[end] - below[first] for first, end in self.bounds()])
 
     def recut(self, pos: np.ndarray, ranks: "int | None" = None, spread: float = 0.0) -> "Slabs":

@@ -196,7 +196,7 @@ class RankedRun:
         counts = np.empty_like(local)
         self.comm.Allreduce(local, counts, op=self._sum)
         below = np.concatenate([[0], np.cumsum(counts)])
-        owned = np.array([below[end] - below[first] for first, end in self.slabs.bounds()])
+        owned = self.slabs.per_rank(below)
         if owned.max() <= (1.0 + self.rebalance) * owned.mean():
             return
         self._recut_at = s.steps  # tried: not again for rebalance_every steps, moved or not
