@@ -36,11 +36,12 @@ class Progress:
         self.start = time.perf_counter()
 
     def postfix(self, run) -> str:
-        s = run.solver
+        s, e = run.solver, run.tally
         text = f"{s.steps} steps, {s.steps / max(run.wall, 1e-9):.1f} steps/s, {run.mipps():.3f} MIPPS"
-        return text + (f", excluded {s.excluded_particles} ({s.excluded_fraction:.3%})" if s.excluded_particles
-                       else "") + (f", left the tank {s.left_tank_particles} ({s.left_tank_fraction:.3%})"
-                                   if s.left_tank_particles else "")
+        return text + (f", excluded {e['excluded_particles']} ({e['excluded_fraction']:.3%})"
+                       if e["excluded_particles"] else "") + (
+            f", left the tank {e['left_tank_particles']} ({e['left_tank_fraction']:.3%})"
+            if e["left_tank_particles"] else "")
 
     def __call__(self, run):
         t, end = min(run.solver.time, run.output.end_time), run.output.end_time
@@ -102,14 +103,33 @@ def run_main(argv=None):
 
     previous = {sig: signal.signal(sig, ask_to_stop) for sig in (signal.SIGTERM, signal.SIGINT)}
     try:
-        return _run(args, stop)
+        from .sph import ConfigError
+        from .sph.exchange import world
+
+        try:
+            comm = world()
+        except ConfigError as err:
+            print(f"gpusph-run: {err}", file=sys.stderr)
+            return 1
+        if comm is None:
+            return _run(args, stop)
+        try:  # a rank that raises takes the others down with it, where they would wait for it forever
+            return _run(args, stop, comm)
+        except BaseException:
+            import traceback
+
+            traceback.print_exc()
+            sys.stderr.flush()
+            comm.Abort(1)
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
 
 
-def _run(args, stop) -> int:
-    """gpusph-run's work, once its arguments are checked; ``stop`` is set by SIGTERM or Ctrl-C."""
+def _run(args, stop, comm=None) -> int:
+    """gpusph-run's work, once its arguments are checked; ``stop`` is set by SIGTERM or Ctrl-C.
+    ``comm``: the MPI ranks it runs on (mpiexec -n N, N > 1; sph/exchange.py): every rank steps,
+    rank 0 alone writes and speaks."""
     from pathlib import Path
 
     from .analysis import report as R
@@ -119,11 +139,21 @@ def _run(args, stop) -> int:
     from .scenes.settings import resolve
     from .sph import ConfigError
 
+    root = comm is None or comm.rank == 0
     out = args.out if args.resume is None else args.resume
-    problem = None if args.resume is not None else folder_problem(args.out, empty=True)
-    if problem:
-        print(f"gpusph-run: --out: {args.out!r} cannot be written: {problem}", file=sys.stderr)
+    if comm is not None and args.resume is not None:
+        if root:
+            print("gpusph-run: --resume: a run on MPI ranks resumes no checkpoint yet (docs/ranks.md); resume it "
+                  "without mpiexec", file=sys.stderr)
         return 1
+    problem = None if args.resume is not None or not root else folder_problem(args.out, empty=True)
+    if comm is not None:
+        problem = comm.bcast(problem)
+    if problem:
+        if root:
+            print(f"gpusph-run: --out: {args.out!r} cannot be written: {problem}", file=sys.stderr)
+        return 1
+    recorder, failed = None, None
     try:
         if args.resume is not None:
             run, recorder, invocation = resume(args.resume)
@@ -135,25 +165,36 @@ def _run(args, stop) -> int:
             invocation = {"scene": where(args.scene), "run_config": [where(f) for f in args.run_config],
                           "sets": args.set}
             scene = load_scene(args.scene)
-            run = Run(scene, resolve(scene, files=args.run_config, sets=args.set))
-            recorder = run.open_recording(args.out)
+            run = Run(scene, resolve(scene, files=args.run_config, sets=args.set), comm=comm)
+            if root:
+                recorder = run.open_recording(args.out)
     except (ConfigError, FileExistsError, ValueError, OSError) as err:
-        print(f"gpusph-run: {err}", file=sys.stderr)
+        failed = f"gpusph-run: {err}"
+    if comm is not None:  # one rank's failure is every rank's (the recording is rank 0's alone)
+        failed = next((f for f in comm.allgather(failed) if f), None)
+    if failed:
+        if root:
+            print(failed, file=sys.stderr)
         return 1
+    if not root:
+        return 0 if run.execute(stop=stop.is_set)["status"] == "completed" else 2
     for warning in run.scene.warnings:
         print(f"gpusph-run: warning: {warning}", file=sys.stderr)
     resumed = f" (resumed at t = {run.solver.time:.4g} s)" if args.resume is not None else ""
     print(f"{run.summary()} -> {out}{resumed}", flush=True)
     checkpoints = Checkpoints(out, invocation, recorder, run.output.checkpoint_interval)
+    every = run.output.checkpoint_interval if comm is None else 0
+    if comm is not None and run.output.checkpoint_interval:
+        print("gpusph-run: note: a run on MPI ranks writes no checkpoints yet (docs/ranks.md)", flush=True)
     start = time.perf_counter()
     result = run.execute(recorder, progress=None if args.quiet else Progress(run), stop=stop.is_set,
-                         checkpoints=checkpoints if run.output.checkpoint_interval else None)
+                         checkpoints=checkpoints if every else None)
     print(f"{result['status']}: {result['steps']} steps, t = {result['simulated_time_s']:.4g} s, wall "
           f"{time.perf_counter() - start:.1f} s, {result['mipps']} MIPPS; {R.excluded_line(result)}; recorded "
           f"{recorder.count} messages to {out}", flush=True)
     if result["status"] == "completed":
         checkpoints.remove()
-    elif result["status"] == "interrupted" and run.output.checkpoint_interval and not run.torn:
+    elif result["status"] == "interrupted" and every and not run.torn:
         try:
             print(f"checkpoint: {checkpoints.write(run)}; continue with gpusph-run --resume {out}", flush=True)
         except (OSError, ValueError) as err:  # a full disk, a path that is no regular file: said, not a traceback

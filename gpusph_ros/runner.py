@@ -61,15 +61,27 @@ def outputs_by(t: float, rate: float) -> int:
 
 
 class Run:
-    """One run of ``scene`` under ``run_config`` (``scenes.settings.resolve``)."""
+    """One run of ``scene`` under ``run_config`` (``scenes.settings.resolve``), on one solver or, given
+    ``comm`` (an MPI communicator of more than one rank), this rank's part of it (sph/exchange.py):
+    every rank steps and measures together, and rank 0 (``root``) alone gets the messages."""
 
-    def __init__(self, scene, run_config, namespace: str = NAMESPACE, frame_id: str = "world"):
+    def __init__(self, scene, run_config, namespace: str = NAMESPACE, frame_id: str = "world", comm=None):
         self.scene, self.run_config = scene, run_config
         self.output = run_config.output
         self.namespace, self.frame_id = namespace, frame_id
         self.model = build_run(scene, run_config)
-        self.solver = self.model.solver()
-        self.measurements = Measurements(self.solver, self.model)
+        self.ranks, across, self.cut = None, None, ""
+        if comm is not None and comm.size > 1:
+            from .measure.ranks import Across
+            from .sph.exchange import RankedRun
+
+            self.ranks = RankedRun(self.model, comm)
+            self.solver, across, self.cut = self.ranks.solver, Across(self.ranks), self.ranks.describe()
+        else:
+            self.solver = self.model.solver()
+        self.root = self.ranks is None or comm.rank == 0
+        self.n = self.solver.n if self.ranks is None else self.ranks.n  # the run's particles
+        self.measurements = Measurements(self.solver, self.model, across)
         self.packer = self._packer(cloud.FIELDS)
         self.cloud = messages.CloudBuilder(self.packer.fields, frame_id=frame_id)
         cfg, world = self.model.config, self.model.scene
@@ -90,6 +102,7 @@ class Run:
                                                                         o.motion.max_torque))
                          for o in world.obstacles if isinstance(o.motion, bodies.Floating)}
         self._applied = {}  # the wrench each floating body's solver table holds
+        self.tally = self.exclusions()  # as of the last output, for a progress line on rank 0 alone
 
     def push(self, body: str, stamp: float, force, torque) -> tuple:
         """An external force and torque on a floating body (drive.WrenchHold: world axes, about its
@@ -145,12 +158,12 @@ class Run:
         """One line on the run: scene, spacing, particles, numerics, device, end time, output rate."""
         cfg = self.model.config
         model = "" if self.run_config.reduction.label == "full" else f" ({self.run_config.reduction.label})"
-        return (f"{self.scene.name}{model}: dx = {cfg.dx:g} m, {self.solver.n} particles "
+        return (f"{self.scene.name}{model}: dx = {cfg.dx:g} m, {self.n} particles "
                 f"({self.model.fluid_particles} fluid), "
                 f"{cfg.kernel} kernel, {cfg.viscosity} viscosity, {cfg.boundary} boundaries, {cfg.density_diffusion} "
                 f"density diffusion, {cfg.precision} on {self.solver.device}"
                 f"{self.device_choice and f' ({self.device_choice})'}; to t = {self.output.end_time:g} s, "
-                f"outputs at {self.output.output_rate:g} Hz")
+                f"outputs at {self.output.output_rate:g} Hz" + (f"; {self.cut}" if self.cut else ""))
 
     @property
     def device_choice(self) -> str:
@@ -168,7 +181,7 @@ class Run:
             "scene_name": self.scene.name, "scene": self.scene.text,
             "run_config": yaml.safe_dump(self.run_config.as_dict(), sort_keys=True),
             "dx": cfg.dx, "kernel": cfg.kernel, "viscosity": cfg.viscosity, "boundary": cfg.boundary,
-            "precision": cfg.precision, "device": str(solver.device), "particles": solver.n,
+            "precision": cfg.precision, "device": str(solver.device), "particles": self.n,
             "fluid_particles": self.model.fluid_particles, "particles_order": "fluid first, then boundary",
             "bodies": yaml.safe_dump(self.model.bodies), "namespace": self.namespace, "frame_id": self.frame_id,
             "time_origin_ns": self.time_origin_ns,
@@ -177,7 +190,7 @@ class Run:
                                         "numpy": np.__version__, "python": platform.python_version()}),
             "revision": revision(),
             "host": platform.node(), "started_utc": datetime.datetime.now(datetime.timezone.utc).isoformat(),
-        }
+        } | ({"ranks": self.cut} if self.cut else {})
 
     def latched_messages(self) -> list:
         """(topic, message) pairs sent once per run: the description, the geometry, the body frames."""
@@ -206,6 +219,8 @@ class Run:
         if self.torn:
             raise RuntimeError("checkpoint: the run was stopped in the middle of a step (Ctrl-C); its state "
                                "is not whole")
+        if self.ranks is not None:
+            raise RuntimeError("checkpoint: a run on MPI ranks writes none yet (docs/ranks.md)")
         return {"format": CHECKPOINT_FORMAT, "solver": checkpoint.capture(self.solver),
                 "next_output": self.next_output, "wall": self.wall, "time_origin_ns": self.time_origin_ns,
                 "output": dataclasses.asdict(self.output)}
@@ -274,10 +289,15 @@ class Run:
         return recorder
 
     def output_messages(self, index: int) -> list:
-        """(topic, message) pairs of output ``index`` at the solver's current time."""
+        """(topic, message) pairs of output ``index`` at the solver's current time; on ranks, rank 0's
+        (every rank measures and packs, together)."""
         t = self.solver.time
-        out = [("/clock", messages.clock(t))]
         sample = self.measurements.sample()
+        every = self.output.particle_every
+        rows = self.cloud_rows() if every and index % every == 0 else None
+        if not self.root:
+            return []
+        out = [("/clock", messages.clock(t))]
         out += messages.measurement_messages(t, sample, self.scene, self.namespace, self.frame_id)
         # the moving bodies' frames, where tf2_msgs is installed (a scene without one asks nothing)
         moving = markers.body_transforms(self.model.scene, self.frame_id, t, sample["poses"]) if sample["poses"] \
@@ -288,19 +308,27 @@ class Run:
             out.append((f"{self.namespace}/bodies/force_arrows",
                         markers.force_arrows(t, sample["wrenches"], self.model.scene, self._force_scales,
                                              self.frame_id)))
-        every = self.output.particle_every
-        if every and index % every == 0:
-            out.append((self.particles_topic, self.cloud.build(t, self.packer.pack())))
+        if rows is not None:
+            out.append((self.particles_topic, self.cloud.build(t, rows)))
         return self._restamped(out, t)
+
+    def cloud_rows(self) -> "np.ndarray | None":
+        """The particle cloud's rows (measure/cloud.py); on ranks, gathered to rank 0 (None elsewhere)
+        in the order one rank packs them."""
+        if self.ranks is None:
+            return self.packer.pack()
+        return self.ranks.rows(self.packer.pack(every=True))
 
     def fast_messages(self, clock: bool = True) -> list:
         """(topic, message) pairs at a wrench-rate time (``Output.wrench_rate``): each body's wrench,
         the mean over the steps since the last, and a moving body's pose and odometry, on topics of
         their own (``<name>/wrench_fast``, ...); /clock first where ``clock``."""
         t = self.solver.time
+        sample = self.measurements.fast_sample()
+        if not self.root:
+            return []
         out = [("/clock", messages.clock(t))] if clock else []
-        out += messages.body_messages(t, self.measurements.fast_sample(), self.model.config.dim, self.namespace,
-                                      self.frame_id, messages.FAST)
+        out += messages.body_messages(t, sample, self.model.config.dim, self.namespace, self.frame_id, messages.FAST)
         return self._restamped(out, t)
 
     def next_event(self) -> float:
@@ -336,7 +364,7 @@ class Run:
                 self.solver.drive(body, **driver.segment(self.solver.time, max(target - self.solver.time, 1.0e-9),
                                                          poses[body]))
         try:
-            self.solver.advance(target, interrupt)
+            (self.solver if self.ranks is None else self.ranks).advance(target, interrupt)
             if not self.solver.reached(target):
                 return None
             rate, reached = self.output.wrench_rate, self.solver.reached
@@ -356,7 +384,7 @@ class Run:
         return self.next_output >= self.n_outputs
 
     def mipps(self) -> float:
-        return self.solver.n * self.solver.steps / max(self.wall, 1e-9) / 1e6
+        return self.n * self.solver.steps / max(self.wall, 1e-9) / 1e6
 
     def execute(self, recorder=None, progress=None, stop=None, checkpoints=None) -> dict:
         """Run to the end time, recording each output; returns the result record (status,
@@ -377,6 +405,7 @@ class Run:
                         recorder.write(topic, msg, self.solver.time)
                 if self.next_output == k:  # a wrench-rate time between two outputs
                     continue
+                self.tally = self.exclusions()
                 if checkpoints is not None:
                     checkpoints(self)
                 if progress is not None:
@@ -396,17 +425,36 @@ class Run:
         """The fluid particles excluded at fault so far (sph.health): how many, their share of the
         fluid mass, by fault ('density_bounds 3, wall_penetration 1' or 'none'), the time of the
         first; and apart, those that left the tank over its walls and their share."""
-        s = self.solver
-        return {"excluded_particles": s.excluded_particles, "excluded_fraction": s.excluded_fraction,
-                "excluded_by_reason": s.describe_excluded(s.excluded.values()),
-                "first_excluded_time_s": s.first_excluded_time, "left_tank_particles": s.left_tank_particles,
-                "left_tank_fraction": s.left_tank_fraction}
+        s, across = self.solver, self.measurements.across  # on ranks, every rank's (measure/ranks.py)
+        counts = across.total(np.array([*s.excluded.values(), s.left_tank_particles], dtype=np.int64))
+        shares = across.total(np.array([s.excluded_fraction, s.left_tank_fraction]))
+        first = float(across.least(np.array([math.inf if s.first_excluded_time is None else s.first_excluded_time])
+                                   )[0])
+        return {"excluded_particles": int(counts[:-1].sum()), "excluded_fraction": float(shares[0]),
+                "excluded_by_reason": s.describe_excluded(counts[:-1]),
+                "first_excluded_time_s": None if first == math.inf else first, "left_tank_particles": int(counts[-1]),
+                "left_tank_fraction": float(shares[1])}
+
+    def health_peaks(self) -> dict:
+        """Solver.health_peaks, on ranks of the whole run: the extremes of every rank's, and the sum of
+        their clumped fractions' peaks (a bound on the run's: each rank's peak may fall at another
+        census). The energy check is off on ranks (sph/exchange.py): no energy growth."""
+        peaks, across = self.solver.health_peaks, self.measurements.across
+        if self.ranks is not None:
+            peaks["peak_energy_growth"] = None
+        ways = {"peak_clumped_fraction": (across.total, 0.0), "min_density_ratio": (across.least, math.inf),
+                "max_density_ratio": (across.most, -math.inf), "peak_energy_growth": (across.most, -math.inf)}
+        out = {}
+        for key, (way, none) in ways.items():
+            value = float(way(np.array([none if peaks[key] is None else peaks[key]]))[0])
+            out[key] = None if math.isinf(value) else value  # none of the ranks had one
+        return out
 
     def result(self, status: str) -> dict:
         """The result record a recording closes with."""
         return {"status": status, "wall_time_s": round(self.wall, 3), "steps": self.solver.steps,
                 "simulated_time_s": self.solver.time, "mipps": round(self.mipps(), 4), "outputs": self.next_output,
-                **self.exclusions(), **self.solver.health_peaks}
+                **self.exclusions(), **self.health_peaks()}
 
 
 CHECKPOINT_FILE = "checkpoint.npz"

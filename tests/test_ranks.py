@@ -90,3 +90,49 @@ def test_slabs_cut_again_mid_run_keep_the_run_bit_for_bit(tmp_path):
     for key in ("pos", "vel", "rho"):
         assert np.array_equal(many[key], one[key]), key
 
+
+
+def _gpusph_run(ranks: int, out: Path, *sets) -> str:
+    """gpusph-run of DamBreak 1 lab at 5 cm, under ``mpiexec -n ranks`` where ranks > 1; its output."""
+    command = [str(Path(sys.executable).parent / "gpusph-run"), "dambreak1_lab", "--out", str(out), "--quiet",
+               *[f"--set={s}" for s in ("dx=0.05", "end_time=0.4", *sets)]]
+    if ranks > 1:
+        command = [str(MPIEXEC), "-n", str(ranks), *command]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=300,
+                          env={**os.environ, "OMP_NUM_THREADS": "1"})
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
+    return done.stdout
+
+
+def test_gpusph_run_on_two_ranks_records_what_one_rank_records(tmp_path):
+    """``mpiexec -n 2 gpusph-run`` (issue 69 items 4-5): the first line names the ranks and the cut,
+    rank 0 records one run, and the recording is one rank's:
+    - every particle cloud and every probe's, sensor's and face load's reading bit for bit (a
+      reading at a point is its owner's: measure/ranks.py);
+    - every sum over particles (the wrench, the pressure blocks) within 1e-6 of the series' largest
+      value: each rank sums its own particles, and the ranks' sums are added in another order;
+    - gpusph-analyze's metrics the same (within 1e-6: the forces are sums)."""
+    from gpusph_ros.analysis import bag
+    from gpusph_ros.analysis.report import analyse
+
+    _gpusph_run(1, tmp_path / "one")
+    said = _gpusph_run(2, tmp_path / "two")
+    assert "2 ranks along x" in said.splitlines()[0] and "rank 1 cells" in said.splitlines()[0], said
+    one, two = bag.read(tmp_path / "one"), bag.read(tmp_path / "two")
+    assert one.clock == two.clock and len(one.clouds) == len(two.clouds) > 2
+    for k in range(len(one.clouds)):
+        a, b = one.cloud(k), two.cloud(k)
+        assert (a.width, a.fields, a.header) == (b.width, b.fields, b.header) and bytes(a.data) == bytes(b.data), k
+    assert set(one.series) == set(two.series)
+    summed = ("wrench", "pressure_blocks", "force_arrows")
+    for topic, series in one.series.items():
+        for key, values in series.items():
+            x, y = np.asarray(values, dtype=float), np.asarray(two.series[topic][key], dtype=float)
+            if any(s in topic for s in summed):
+                assert np.abs(x - y).max() <= 1e-6 * np.abs(x).max(), (topic, key)
+            else:
+                assert np.array_equal(x, y), (topic, key)
+    rows = [analyse(tmp_path / name, rec=rec)[0]["metrics"] for name, rec in (("one", one), ("two", two))]
+    assert [m["key"] for m in rows[0]] == [m["key"] for m in rows[1]] and len(rows[0]) >= 8
+    for a, b in zip(*rows):
+        assert a["value"] == pytest.approx(b["value"], rel=1e-6, abs=1e-9), a["key"]

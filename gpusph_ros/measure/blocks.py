@@ -14,6 +14,7 @@ import warp as wp
 
 from ..sph import sums
 from ..sph.state import FLUID
+from .ranks import Alone
 
 ACROSS = 3.0  # block size across the face, in dx
 ALONG = 4.0  # block depth along the flow, in dx
@@ -26,10 +27,11 @@ def build(scalar):
     @wp.kernel(enable_backward=False, module="unique")
     def bin_pressure(lo: wp.array(dtype=vec), hi: wp.array(dtype=vec), bound_lo: vec, bound_hi: vec,
                      pos: wp.array(dtype=vec), pressure: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
-                     counts: wp.array(dtype=wp.int32), part: wp.array2d(dtype=scalar), lead: int, step: int,
-                     members: int):
+                     ranked: int, owned: wp.array(dtype=wp.int32), counts: wp.array(dtype=wp.int32),
+                     part: wp.array2d(dtype=scalar), lead: int, step: int, members: int):
         """Block k's pressure sum of each pressure block into part[k] (sums.py: a fixed order of the
-        terms) and the fluid particles in each into counts (integers: the same in any order)."""
+        terms) and the fluid particles in each into counts (integers: the same in any order);
+        ``ranked``: only the particles this rank owns (measure/ranks.py)."""
         k = wp.tid()
         n = ptype.shape[0]
         for b in range(lo.shape[0]):
@@ -38,7 +40,7 @@ def build(scalar):
             i = sums.member(k, j, lead, step)
             if i < n:
                 x = pos[i]
-                near = ptype[i] == FLUID
+                near = ptype[i] == FLUID and (ranked == 0 or owned[i] != 0)
                 # most particles are nowhere near a block
                 for ax in range(3):
                     if x[ax] < bound_lo[ax] or x[ax] >= bound_hi[ax]:
@@ -87,8 +89,9 @@ def face_blocks(box_lo, box_hi, dx: float, dim: int, offset: float):
 class PressureBlockForce:
     """The x-force on the box [box_lo, box_hi] from pressure blocks at each of ``offsets`` [m]."""
 
-    def __init__(self, solver, box_lo, box_hi, offsets=(0.0, 0.06)):
+    def __init__(self, solver, box_lo, box_hi, offsets=(0.0, 0.06), across=None):
         self.solver = solver
+        self.across = across or Alone(solver)
         cfg = solver.config
         self.offsets = tuple(float(o) for o in offsets)
         parts = [face_blocks(box_lo, box_hi, cfg.dx, cfg.dim, o) for o in self.offsets]
@@ -109,15 +112,15 @@ class PressureBlockForce:
 
     def sample(self) -> dict:
         """{offset: (force_x, upstream, downstream)} [N, or N/m in 2D]; an empty block adds nothing."""
-        params, fields, _ = self.solver.measurement_view()
-        s = self.solver
+        params, fields, _ = self.across.view()
+        s, a = self.solver, self.across
         self._counts.zero_()
         wp.launch(self._bin, dim=self._part.count, inputs=[self._lo, self._hi, self._bound_lo, self._bound_hi, s.pos,
-                                                           fields.pressure, s.ptype, self._counts, *self._part.args()],
-                  device=s.device)
+                                                           fields.pressure, s.ptype, a.ranked, a.owned, self._counts,
+                                                           *self._part.args()], device=s.device)
         self._part.total(self._sums)
-        counts = self._counts.numpy()
-        mean = np.where(counts > 0, self._sums.numpy().astype(np.float64) / np.maximum(counts, 1), 0.0)
+        counts = a.total(self._counts.numpy())
+        mean = np.where(counts > 0, a.total(self._sums.numpy().astype(np.float64)) / np.maximum(counts, 1), 0.0)
         load = mean * self.area
         out = {}
         for k, offset in enumerate(self.offsets):

@@ -91,10 +91,11 @@ class CloudPacker:
         self._rows = wp.zeros(shape, dtype=wp.float32, device=dev)
         self._host = self._rows if dev.is_cpu else wp.zeros(shape, dtype=wp.float32, device="cpu", pinned=True)
 
-    def pack(self) -> np.ndarray:
+    def pack(self, every: bool = False) -> np.ndarray:
         """The rows, (n, 3 + fields) float32: a view of the reusable host buffer, valid until
         the next call. Excluded particles (sph.health) and a refinement level's passive particles
-        and vacant slots (sph.levels) are left out, the others keep their order."""
+        and vacant slots (sph.levels) are left out, the others keep their order; ``every``: none
+        left out, one row a particle id (a rank's, which keeps its own: sph/exchange.py)."""
         s = self.solver
         s.update_pressure()
         # on every core of a CPU (the solver's launcher): a memory-bound scatter of 32 B a particle
@@ -104,4 +105,6 @@ class CloudPacker:
             wp.copy(self._host, self._rows)  # into pinned memory: asynchronous until the sync below
         wp.synchronize_device(s.device)
         rows = self._host.numpy()
-        return rows[s.kept()] if s.excluded_particles or s.left_tank_particles or s.config.zones else rows
+        if every or not (s.excluded_particles or s.left_tank_particles or s.config.zones):
+            return rows
+        return rows[s.kept()]

@@ -21,6 +21,7 @@ import warp as wp
 
 from ..sph import health, sums
 from ..sph.state import DT
+from .ranks import Alone
 
 
 @functools.lru_cache(maxsize=None)
@@ -30,13 +31,15 @@ def build(scalar):
 
     @wp.kernel(enable_backward=False, module="unique")
     def wrench_part(body_id: int, centre: vec, body: wp.array(dtype=wp.int32), pos: wp.array(dtype=vec),
-                    mass: wp.array(dtype=scalar), acc: wp.array(dtype=vec), timed: int, stride: int,
+                    mass: wp.array(dtype=scalar), acc: wp.array(dtype=vec), ranked: int,
+                    owned: wp.array(dtype=wp.int32), timed: int, stride: int,
                     fail: wp.array(dtype=wp.int32), clock: wp.array(dtype=wp.float64), span: wp.array(dtype=wp.float64),
                     part: wp.array2d(dtype=vec), lead: int, step: int, members: int, chunk: int,
                     launch_stride: int):
         """Block k's share (sums.py) of the force and torque on the body (part[k, 0], part[k, 1]);
         ``timed``: of the step's impulse and angular impulse, its length added to span by block 0
-        (a failed step adds nothing: its state is not kept)."""
+        (a failed step adds nothing: its state is not kept). ``ranked``: only the particles this rank
+        owns (measure/ranks.py)."""
         k = wp.tid() * launch_stride + chunk
         n = body.shape[0]
         weight = scalar(1.0)
@@ -55,7 +58,7 @@ def build(scalar):
         for j in range(members):
             i = sums.member(k, j, lead, step)
             if i < n:
-                if body[i] == body_id:
+                if body[i] == body_id and (ranked == 0 or owned[i] != 0):
                     f = mass[i] * acc[i] * weight
                     force = force + f
                     torque = torque + wp.cross(pos[i] - centre, f)
@@ -67,10 +70,12 @@ def build(scalar):
 
 class BodyWrench:
     """The wrench on body ``body_id`` about ``centre`` [m], the mean over the steps since the last
-    sample. In 2D runs forces are per unit depth."""
+    sample. In 2D runs forces are per unit depth. ``across``: how the ranks of a run add it up
+    (ranks.py)."""
 
-    def __init__(self, solver, body_id: int, centre=(0.0, 0.0, 0.0)):
+    def __init__(self, solver, body_id: int, centre=(0.0, 0.0, 0.0), across=None):
         self.solver = solver
+        self.across = across or Alone(solver)
         self.body_id = int(body_id)
         self.centre = solver.vec(*[float(c) for c in centre])
         self._kernel = build(solver.scalar)
@@ -79,12 +84,13 @@ class BodyWrench:
         self._impulse = wp.zeros(2, dtype=solver.vec, device=solver.device)
         self._span = wp.zeros(1, dtype=wp.float64, device=solver.device)
         self._last = None
-        solver.each_step(self._add)
+        self.across.each_step(self._add)
 
     def _sum(self, timed: bool, out):
         s = self.solver
         s.launch(self._kernel, self._part.count,
-                 [self.body_id, self.centre, s.body, s.pos, s.mass, s.acc, int(timed), s.params.coarse_stride,
+                 [self.body_id, self.centre, s.body, s.pos, s.mass, s.acc, self.across.ranked, self.across.owned,
+                  int(timed), s.params.coarse_stride,
                   s.failures, s.clock, self._span, *self._part.args()])
         self._part.total(out, add=timed)
 
@@ -101,11 +107,11 @@ class BodyWrench:
         """(force, torque) as host 3-vectors [N, N m]."""
         span = float(self._span.numpy()[0])
         if span > 0.0:
-            out = self._impulse.numpy().astype(np.float64) / span
+            out = self.across.total(self._impulse.numpy().astype(np.float64)) / span
             self.restart()
             self._last = (out[0], out[1])
         if self._last is not None:
             return self._last
         self._sum(False, self._out)
-        out = self._out.numpy().astype(np.float64)
+        out = self.across.total(self._out.numpy().astype(np.float64))
         return out[0], out[1]

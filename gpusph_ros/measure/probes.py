@@ -15,6 +15,7 @@ import warp as wp
 
 from ..sph import eos, kernels, neighbours, state
 from ..sph.state import FLUID
+from .ranks import Alone
 
 
 @functools.lru_cache(maxsize=None)
@@ -84,12 +85,13 @@ def build(scalar):
 class PointProbes:
     """Probes at fixed points of one solver, each particle's kernel ``widen`` times the run's (2: a
     sensor that reads as De Courcy et al. 2024 read theirs: sensors.py). ``sample()`` returns host
-    arrays."""
+    arrays. ``across``: how the ranks of a run add a reading up (ranks.py; one solver by default)."""
 
-    def __init__(self, solver, points, widen: int = 1):
+    def __init__(self, solver, points, widen: int = 1, across=None):
         self.solver = solver
         self.widen = int(widen)
-        pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        self.across = across or Alone(solver)
+        self.host_points = pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
         dev = solver.device
         self._interpolate = build(solver.scalar)
         self.points = wp.array(pts, dtype=solver.vec, device=dev)
@@ -111,6 +113,6 @@ class PointProbes:
     def sample(self) -> dict:
         """vel (k x 3), pressure, rho, and weight = sum W V (0 where no fluid is within 2h: a dry
         probe, whose other values are then 0)."""
-        self.launch(self.solver.measurement_view())
-        return {"vel": self._vel.numpy().astype(np.float64), "pressure": self._pressure.numpy().astype(np.float64),
-                "rho": self._rho.numpy().astype(np.float64), "weight": self._weight.numpy().astype(np.float64)}
+        self.launch(self.across.view())
+        arrays = {"vel": self._vel, "pressure": self._pressure, "rho": self._rho, "weight": self._weight}
+        return {k: self.across.pick(a.numpy(), self.host_points).astype(np.float64) for k, a in arrays.items()}

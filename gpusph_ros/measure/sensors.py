@@ -51,6 +51,7 @@ import warp as wp
 
 from ..sph import boundaries, levels
 from .probes import PointProbes
+from .ranks import Alone
 
 OFFSET_H = 1.5  # [h] the interpolation points' distance in front of the face
 SMOOTHED_WIDEN = 2  # a smoothed reading's kernel, in the run's smoothing lengths (De Courcy et al. 2024)
@@ -101,11 +102,13 @@ class WallPressure:
     """The pressure on wall faces at fixed points (n x 3) with their inward normals (n x 3), in the
     way right for the solver's boundary model (see the module docstring); ``sample()`` returns the
     pressure at each point, 0 where dry. Each point reads at the spacing and smoothing length of
-    the level that is the flow where it stands (``spacing``: a refinement zone's inside it)."""
+    the level that is the flow where it stands (``spacing``: a refinement zone's inside it).
+    ``across``: how the ranks of a run add a reading up (ranks.py)."""
 
-    def __init__(self, solver, points, normals):
+    def __init__(self, solver, points, normals, across=None):
         cfg = solver.config
         self.solver = solver
+        self.across = across or Alone(solver)
         self.points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
         self.normals = np.asarray(normals, dtype=np.float64).reshape(-1, 3)
         self.spacing = levels.spacing_at(self.points, cfg.zones, cfg.dx)
@@ -136,8 +139,10 @@ class WallPressure:
         return self._pressure, self._weight
 
     def sample(self) -> np.ndarray:
-        pressure, weight = self.launch(self.solver.measurement_view())
-        return face_pressure(pressure.numpy().astype(np.float64), weight.numpy(), self.drop)
+        pressure, weight = self.launch(self.across.view())
+        pick = self.across.pick
+        return face_pressure(pick(pressure.numpy(), self.points).astype(np.float64), pick(weight.numpy(), self.points),
+                             self.drop)
 
 
 def face_load_points(lo, hi, dx: float, dim: int, tank):

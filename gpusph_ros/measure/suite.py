@@ -18,16 +18,19 @@ from .blocks import PressureBlockForce
 from .columns import ColumnMeans
 from .forces import BodyWrench
 from .probes import PointProbes
+from .ranks import Alone
 from .sensors import WallPressure, face_load, face_load_points, face_points
 from .surface import TopLevels, elevation, floor_under, gauge_points
 from .transducers import Transducers
 
 
 class Measurements:
-    """The measurements of ``model`` (a ``scenes.build.Model``) on ``solver``."""
+    """The measurements of ``model`` (a ``scenes.build.Model``) on ``solver``; ``across``: how the
+    ranks of a run add them up (ranks.py; one solver by default)."""
 
-    def __init__(self, solver, model):
+    def __init__(self, solver, model, across=None):
         scene, cfg = model.scene, solver.config
+        self.across = across = across or Alone(solver)
         dim, up = cfg.dim, cfg.dim - 1
 
         def vertical_line(position):  # (lo, hi) of the tank's vertical line through a horizontal point
@@ -76,25 +79,27 @@ class Measurements:
         self._wrenches, self._blocks, self._faces, self._moving, self._fast = {}, {}, {}, {}, {}
         for obstacle in scene.obstacles:
             centre = np.asarray(obstacle.centre(dim))
-            self._wrenches[obstacle.name] = BodyWrench(solver, model.bodies[obstacle.name], centre)
+            self._wrenches[obstacle.name] = BodyWrench(solver, model.bodies[obstacle.name], centre, across)
             if obstacle.motion is not None:
                 self._moving[obstacle.name] = (model.bodies[obstacle.name], centre)
                 continue
-            self._blocks[obstacle.name] = PressureBlockForce(solver, obstacle.lo, obstacle.hi, obstacle.block_offsets)
+            self._blocks[obstacle.name] = PressureBlockForce(solver, obstacle.lo, obstacle.hi, obstacle.block_offsets,
+                                                             across)
             spacing = finest_in(obstacle.lo, obstacle.hi, cfg.zones, cfg.dx)
             pts, normals, areas = face_load_points(obstacle.lo, obstacle.hi, spacing, dim, scene.tank)
             self._faces[obstacle.name] = (len(wall), pts, normals, areas, centre)
             wall.extend(pts)
             wall_normals.extend(normals)
-        self._points = PointProbes(solver, points) if points else None
-        self._wall = WallPressure(solver, wall, wall_normals) if wall else None
-        self._transducers = [Transducers(solver, found, reading == "smoothed") for reading, found in sensors.items()
-                             if found]
-        self._tops = TopLevels(solver, tops, [line_spacing(p.position) for p in tops]) if tops else None
+        self._points = PointProbes(solver, points, across=across) if points else None
+        self._wall = WallPressure(solver, wall, wall_normals, across) if wall else None
+        self._transducers = [Transducers(solver, found, reading == "smoothed", across)
+                             for reading, found in sensors.items() if found]
+        self._tops = TopLevels(solver, tops, [line_spacing(p.position) for p in tops], across) if tops else None
         columns = [p for p in scene.probes if p.type == "column"]
         self._column_names = [p.name for p in columns]
         self._columns = (ColumnMeans(solver, [p.position for p in columns],
-                                     [p.radius_dx * line_spacing(p.position) for p in columns]) if columns else None)
+                                     [p.radius_dx * line_spacing(p.position) for p in columns], across)
+                         if columns else None)
 
     def restart(self):
         """Forget what the measurements that average over steps have summed (a restored state)."""
@@ -106,7 +111,7 @@ class Measurements:
         outputs (runner: wrench_rate): apart from the outputs' sums, so that each reports the mean
         over its own interval. Once; the sums go on after, at one reduction per body and step."""
         if not self._fast:
-            self._fast = {name: BodyWrench(self.solver, wrench.body_id, wrench.centre)
+            self._fast = {name: BodyWrench(self.solver, wrench.body_id, wrench.centre, self.across)
                           for name, wrench in self._wrenches.items()}
 
     def fast_sample(self) -> dict:
@@ -139,6 +144,7 @@ class Measurements:
         is in its own axes about its reference point."""
         out = {"points": {}, "profiles": {}, "gauges": {}, "sensors": {}, "columns": {}, "wrenches": {},
                "pressure_loads": {}, "blocks": {}, "poses": {}}
+        self.across.view()  # on ranks, together: the view's lists built where any rank's are stale
         up = self.scene.dim - 1
         if self._points is not None:
             values = self._points.sample()

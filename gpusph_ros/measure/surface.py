@@ -21,6 +21,7 @@ import warp as wp
 
 from ..sph.state import FLUID
 from .probes import PointProbes
+from .ranks import Alone
 
 LEVEL = 0.5
 SAMPLES_PER_DX = 4
@@ -110,10 +111,11 @@ DRY = -1.0e30  # no fluid particle near the line
 class TopLevels:
     """Gauges (schema Probes of ``reading: top``) that read the top of the highest fluid particle
     within one ``spacing`` (one per gauge) of their vertical line: its height plus half a spacing;
-    0 where no fluid is near."""
+    0 where no fluid is near. ``across``: how the ranks of a run find the highest (ranks.py)."""
 
-    def __init__(self, solver, probes, spacings):
+    def __init__(self, solver, probes, spacings, across=None):
         self.solver = solver
+        self.across = across or Alone(solver)
         self.names = [p.name for p in probes]
         self.half = 0.5 * np.asarray(spacings, dtype=np.float64)
         dev = solver.device
@@ -128,6 +130,6 @@ class TopLevels:
         self._top.fill_(DRY)
         wp.launch(self._kernel, dim=s.n, inputs=[s.config.dim - 1, self._centres, self._radius2, s.pos, s.ptype,
                                                  self._top], device=s.device)
-        top = self._top.numpy().astype(np.float64)
+        top = self.across.most(self._top.numpy()).astype(np.float64)
         return {name: float(t + self.half[k]) if t > 0.5 * DRY else 0.0
                 for k, (name, t) in enumerate(zip(self.names, top))}

@@ -29,6 +29,7 @@ import warp as wp
 from ..sph import health
 from ..sph.state import DT
 from .probes import PointProbes
+from .ranks import Alone
 from .sensors import SMOOTHED_WIDEN, WallPressure
 
 SAMPLINGS = ("mean", "step")
@@ -84,16 +85,18 @@ class Transducers:
     fluid at the face, a kernel SMOOTHED_WIDEN times as wide, each point clipped at 0), else by the
     wall model's reading (WallPressure). ``sample()``: {name: pressure [Pa]}."""
 
-    def __init__(self, solver, sensors, smoothed: bool):
+    def __init__(self, solver, sensors, smoothed: bool, across=None):
         self.solver = solver
+        self.across = across or Alone(solver)
         self.names = [name for name, *_ in sensors]
-        points = np.concatenate([np.asarray(pts, dtype=np.float64).reshape(-1, 3) for _, pts, *_ in sensors])
+        self._points = points = np.concatenate([np.asarray(pts, dtype=np.float64).reshape(-1, 3)
+                                                for _, pts, *_ in sensors])
         normals = np.concatenate([np.asarray(nrm, dtype=np.float64).reshape(-1, 3) for _, _, nrm, *_ in sensors])
         counts = np.array([len(np.asarray(pts).reshape(-1, 3)) for _, pts, *_ in sensors])
         if smoothed:
-            self._source, drop = PointProbes(solver, points, widen=SMOOTHED_WIDEN), np.zeros(len(points))
+            self._source, drop = PointProbes(solver, points, SMOOTHED_WIDEN, across), np.zeros(len(points))
         else:
-            self._source = WallPressure(solver, points, normals)
+            self._source = WallPressure(solver, points, normals, across)
             drop = self._source.drop
         self._clip_points = int(smoothed)
         self.sampling = [sampling for *_, sampling, _, _ in sensors]
@@ -109,11 +112,14 @@ class Transducers:
                                                                 for _ in range(4))
         self._primed = wp.zeros(k, dtype=wp.int32, device=dev)
         self._kernel = build(solver.scalar)
-        solver.each_step(self._add)
+        self.across.each_step(self._add)
 
     def _read(self, view, timed: bool):
         s = self.solver
         pressure, weight = self._source.launch(view)
+        if self.across.ranked:  # each point as its owner reads it, on every rank (ranks.py)
+            for a in (pressure, weight):
+                a.assign(self.across.pick(a.numpy(), self._points))
         wp.launch(self._kernel, dim=len(self.names),
                   inputs=[pressure, weight, self._drop, self._clip_points, self._first, self._last, self._clip,
                           self._tau, int(timed), s.params.coarse_stride, s.failures, s.clock, self._now,
@@ -132,7 +138,7 @@ class Transducers:
         """Each sensor's reading now: the mean over the steps since the last sample (its reading
         now where no step was taken since), or the reading at this step (``sampling: step``); through
         its response where it has one and a step was taken."""
-        self._read(self.solver.measurement_view(), False)
+        self._read(self.across.view(), False)
         # copies: on the CPU numpy() is a view of the device's memory, which zero_() clears
         now, span, impulse = (a.numpy().copy() for a in (self._now, self._span, self._impulse))
         held = np.where(self._lagged & (self._primed.numpy() != 0), self._filtered.numpy(), now)

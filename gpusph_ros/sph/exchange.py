@@ -30,6 +30,7 @@ Each rank sends every other rank the owned particles within ``depth`` + 1 cells 
 (an all-gather): the neighbours alone need them, and a point-to-point exchange with each neighbour
 would send less where there are many ranks.
 """
+import os
 import time
 
 import numpy as np
@@ -44,6 +45,25 @@ from .state import REORDER_DUE, VACANT
 
 HALO_CELLS, SPS_HALO_CELLS = 3, 4  # measured: tests/test_halo_depth.py
 ROOM = 1.5  # slots a rank keeps over its first particle count: a flow brings it more than it starts with
+
+
+# where an MPI launcher says how many ranks it started: MPICH's Hydra (and Slurm's PMI), Open MPI
+LAUNCHED = ("PMI_SIZE", "OMPI_COMM_WORLD_SIZE")
+
+
+def world():
+    """MPI's world communicator where ``mpiexec -n N`` (N > 1) started this process, else None: a
+    process outside mpiexec never loads mpi4py. ConfigError saying what to install where mpiexec
+    asked for ranks and mpi4py is missing."""
+    sizes = [int(os.environ[name]) for name in LAUNCHED if os.environ.get(name, "").isdigit()]
+    if not sizes or max(sizes) <= 1:
+        return None
+    try:
+        from mpi4py import MPI
+    except ImportError:
+        raise ConfigError("ranks", max(sizes), "1, or more with mpi4py and an MPI installed (pip install mpi4py "
+                                               "mpich, the versions requirements.txt pins)") from None
+    return MPI.COMM_WORLD
 
 
 def supported(model) -> None:
@@ -73,6 +93,11 @@ class RankedRun:
         self.slabs = split(p.pos, (0.0, 0.0, 0.0), tank, cfg.periodic, list_skin() * 2.0 * cfg.h, comm.size)
         self.depth = SPS_HALO_CELLS if cfg.viscosity == "sps" else HALO_CELLS
         self.first, self.end = self.slabs.bounds()[comm.rank]
+        # a CUDA device is this node's GPU of the rank's own number among the node's ranks
+        self.local_rank = comm.Split_type(MPI.COMM_TYPE_SHARED).Get_rank()
+        if str(cfg.device).startswith("cuda"):
+            cfg = cfg.replace(device=f"cuda:{self.local_rank}")
+        self.n = len(p)  # the run's particles, every rank's together
         fluid = p.ptype == 0
         members, owned = self._members(p.pos, np.arange(len(p)))
         self.capacity = int(np.ceil(ROOM * len(members))) + 8
@@ -87,6 +112,7 @@ class RankedRun:
         # the mean, at most every ``rebalance_every`` steps (issue 69 item 3)
         self.rebalance, self.rebalance_every, self._recut_at = rebalance, rebalance_every, 0
         self.recuts = 0
+        self._hooks = []  # each_step's
         self.exchange_s = 0.0  # wall time in the exchange (hands changed, the halo refreshed), for bench/ranks.py
         # mDBC's ghost-node offsets by run id, each a wall particle's own geometry (boundaries/faces.py),
         # found once: a wall particle's stays its own as the slots are rewritten
@@ -161,7 +187,32 @@ class RankedRun:
         return {k: np.concatenate([q[k] for q in parts]) for k in local}
 
     # -- the step -------------------------------------------------------------------------------
-    def step(self) -> float:
+    def each_step(self, hook):
+        """Call ``hook()`` after every step, once the halo is its owners' state again: a measurement
+        that adds up over the steps between its samples (measure/ranks.py)."""
+        self._hooks.append(hook)
+
+    def advance(self, t_target: float, interrupt=None) -> float:
+        """Step until the simulated time reaches ``t_target`` exactly, as Solver.advance does;
+        ``interrupt``, asked before each step on every rank, stops them all when it answers true on
+        any (a Ctrl-C that reached one rank first)."""
+        s = self.solver
+        while not s.reached(t_target):
+            if interrupt is not None and self.comm.allreduce(bool(interrupt()), op=self._max):
+                break
+            self.step(t_target)
+        return s.time
+
+    def view(self):
+        """Solver.measurement_view on every rank together: where any rank's lists are stale, the
+        particles change hands first, as the next step would have them do."""
+        s = self.solver
+        if self.comm.allreduce(int(s.neighbours.stale.numpy()[0]), op=self._max):
+            self._balance()
+            self._migrate()
+        return s.measurement_view()
+
+    def step(self, t_target: float = float("inf")) -> float:
         s = self.solver
         start = time.perf_counter()
         stale = self.comm.allreduce(int(s.neighbours.stale.numpy()[0]), op=self._max)
@@ -173,7 +224,7 @@ class RankedRun:
         self.exchange_s += time.perf_counter() - start
         failed = ""
         try:
-            s.step()
+            s.step(t_target)
         except HealthError as err:
             failed = str(err)
         why = self.comm.allgather(failed)
@@ -182,6 +233,8 @@ class RankedRun:
         start = time.perf_counter()
         self._refresh()
         self.exchange_s += time.perf_counter() - start
+        for hook in self._hooks:
+            hook()
         return s.time
 
     def _balance(self):
@@ -259,6 +312,29 @@ class RankedRun:
         s.ghost.assign(ghost)
         self.gid = self._padded(members, -1)
         s.neighbours.stale.fill_(1)
+
+    def rows(self, rows: np.ndarray) -> "np.ndarray | None":
+        """Rank 0: of ``rows`` (one a local id, as measure/cloud.py packs them), those of every rank's
+        owned particles that are the flow or its walls (Solver.kept), in the order of their run ids:
+        what one rank packs. None elsewhere."""
+        s = self.solver
+        keep = s.kept()
+        keep[s.ids.numpy()] &= s.fields.owned.numpy() != 0
+        parts = self.comm.gather((self.gid[keep], rows[keep]), root=0)
+        if parts is None:
+            return None
+        gid = np.concatenate([g for g, _ in parts])
+        return np.concatenate([r for _, r in parts])[np.argsort(gid)]
+
+    def describe(self) -> str:
+        """Rank 0: how the run is cut and where each rank steps ('2 ranks along x: cells 0-11 on cpu,
+        ...'); "" elsewhere."""
+        where = self.comm.gather((self.first, self.end, str(self.solver.device)), root=0)
+        if where is None:
+            return ""
+        axis = "xyz"[self.slabs.axis]
+        return (f"{self.comm.size} ranks along {axis} ({self.slabs.n_cells} cells of {self.slabs.cell:.4g} m): "
+                + ", ".join(f"rank {r} cells {a}-{b - 1} on {d}" for r, (a, b, d) in enumerate(where)))
 
     def gather(self, keys=("pos", "vel", "rho")) -> "dict | None":
         """Rank 0: the owned particles' ``keys`` in the solver's precision, by run id; None elsewhere."""

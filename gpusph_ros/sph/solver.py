@@ -812,11 +812,12 @@ class Solver:
             return
         self._launch_step(block)
 
-    def step(self) -> float:
-        """One step of the adaptive size (or dt_fixed); returns the new time."""
+    def step(self, t_target: float = math.inf) -> float:
+        """One step of the adaptive size (or dt_fixed), cut short to end at ``t_target`` as
+        ``advance`` cuts its last; returns the new time."""
         self._sync()
         while True:  # again where the lists were widened
-            self.aim(math.inf)
+            self.aim(t_target)
             self._launch_step()
             if not self._sync():
                 return self.time
