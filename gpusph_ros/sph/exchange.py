@@ -291,8 +291,10 @@ class RankedRun:
         members, owned = self._members(every["pos"], every["gid"])
         at = np.searchsorted(every["gid"], members)  # np.unique left ``every`` in id order
         m = len(members)
-        if m > self.capacity:
-            raise RuntimeError(f"rank {self.comm.rank}: {m} particles, more than its {self.capacity} slots")
+        full = [f"rank {r}: {k} particles, more than its {c} slots" for r, (k, c) in
+                enumerate(self.comm.allgather((m, self.capacity))) if k > c]
+        if full:  # on every rank: one rank's error alone would leave the others waiting for it
+            raise RuntimeError("; ".join(full))
         hdx = s.config.hdx
         fields = {"pos": every["pos"][at], "vel": every["vel"][at], "rho": every["rho"][at],
                   "mass": every["mass"][at], "ptype": every["ptype"][at], "body": every["body"][at],

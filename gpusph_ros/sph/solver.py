@@ -368,6 +368,12 @@ class Solver:
                   device=self.device)
         self.neighbours.moved(self.pos, self.vel, self._clock)
         wp.capture_if(self.flag(SHEPARD_DUE), on_true=self.shepard_filter, rebuild=False)
+        if self._step_hooks:  # on the state the step ends on, its Shepard filter's too; none for a step not taken
+            wp.capture_if(self.flag(LISTS_HOLD), on_true=self._after_step)
+
+    def _after_step(self):
+        for hook in self._step_hooks:
+            hook()
 
     def _evolve(self):
         """The step from its lists on: rates, the predictor-corrector, the checks and the commit."""
@@ -405,8 +411,6 @@ class Solver:
                       inputs=[self._fail, self._rigid_c, self._rigid], device=dev)
         if self.config.zones:
             self._relevel()
-        for hook in self._step_hooks:
-            hook()
 
     def _work_on_fluid(self):
         """The moving bodies' work on the fluid over the step (bodies.work_on_fluid), from the rates
@@ -515,9 +519,10 @@ class Solver:
                   device=self.device)
 
     def each_step(self, hook):
-        """Call ``hook()`` at the end of every step, before the clock ticks: a measurement that
-        accumulates on the device over the steps between its samples (measure/forces.py). It may
-        only launch: it runs inside the step, where the host reads nothing."""
+        """Call ``hook()`` at the end of every step taken, on the state it ends on (its Shepard
+        filter's too, as a rank's hooks read it: sph/exchange.py): a measurement that accumulates on
+        the device over the steps between its samples (measure/forces.py). It may only launch: it
+        runs inside the step, where the host reads nothing."""
         self._step_hooks.append(hook)
         self._graph.drop()
 
