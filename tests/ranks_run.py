@@ -3,13 +3,30 @@ owned particles' state gathered to rank 0 and saved with each step's time and ho
 were cut again.
 
     mpiexec -n N python -m mpi4py tests/ranks_run.py OUT.npz SCENE DX STEPS [KEY=VALUE ...]
-        [--rebalance FRACTION] [--every STEPS]
+        [--rebalance FRACTION] [--every STEPS] [--save-at STEP --state FILE | --resume FILE]
+
+``--save-at``: the run's state (sph/portable.py) after that many steps, to FILE; ``--resume``: go on
+from such a state for STEPS more steps.
 """
 import argparse
 
 import numpy as np
 import warp as wp
 from mpi4py import MPI
+
+
+def save_state(path, state):
+    if state is not None:
+        np.savez(path, **{f"particles.{k}": v for k, v in state["particles"].items()},
+                 **{f"counters.{k}": v for k, v in state["counters"].items()})
+
+
+def load_state(path) -> dict:
+    from gpusph_ros.sph import portable
+
+    with np.load(path) as f:
+        return {"format": portable.FORMAT, "particles": {k: f[f"particles.{k}"] for k in portable.PARTICLE_KEYS},
+                "counters": {k: f[f"counters.{k}"] for k in portable.COUNTERS}}
 
 
 def main():
@@ -21,6 +38,9 @@ def main():
     ap.add_argument("sets", nargs="*")
     ap.add_argument("--rebalance", type=float, default=0.1)
     ap.add_argument("--every", type=int, default=100)
+    ap.add_argument("--save-at", type=int, default=-1)
+    ap.add_argument("--state")
+    ap.add_argument("--resume")
     args = ap.parse_args()
     wp.config.log_level = wp.LOG_WARNING
     wp.config.quiet = True
@@ -31,9 +51,14 @@ def main():
 
     sc = load_scene(args.scene)
     model = build_run(sc, resolve(sc, sets=args.sets, dx=args.dx, end_time=10.0))
-    run = RankedRun(model, MPI.COMM_WORLD, rebalance=args.rebalance, rebalance_every=args.every)
+    state = None if args.resume is None else load_state(args.resume)
+    run = RankedRun(model, MPI.COMM_WORLD, rebalance=args.rebalance, rebalance_every=args.every, state=state)
     cuts = [run.slabs.cuts]
-    times = [run.step() for _ in range(args.steps)]
+    times = []
+    for k in range(args.steps):
+        if k == args.save_at:
+            save_state(args.state, run.portable())
+        times.append(run.step())
     cuts.append(run.slabs.cuts)
     state = run.gather()
     if state is not None:

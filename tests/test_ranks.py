@@ -33,6 +33,7 @@ pytest.importorskip("mpi4py")
 pytestmark = pytest.mark.physics
 
 HERE = Path(__file__).parent
+sys.path.insert(0, str(HERE))  # ranks_run, its state files
 MPIEXEC = Path(sys.executable).parent / "mpiexec"
 PERIODIC = {"name": "periodic_collapse", "dim": 2, "tank": [0.6, 0.3], "periodic": [True, False],
             "walls": "particles", "fluid": [{"name": "water", "lo": [0.0, 0.0], "hi": [0.15, 0.15]}]}
@@ -143,3 +144,69 @@ def test_gpusph_run_on_two_ranks_records_what_one_rank_records(scene, sets, metr
     assert [m["key"] for m in rows[0]] == [m["key"] for m in rows[1]] and len(rows[0]) >= metrics
     for a, b in zip(*rows):
         assert a["value"] == pytest.approx(b["value"], rel=1e-6, abs=1e-9, nan_ok=True), a["key"]
+
+
+def test_a_state_taken_on_three_ranks_goes_on_bit_for_bit_on_two_and_on_one(tmp_path):
+    """The collapse on 3 ranks for 250 steps, its state (sph/portable.py) taken after 100: taken up
+    on 2 ranks, and on one solver, it steps the other 150 as the run that took it, bit for bit
+    (issue 69 item 4: a checkpoint does not depend on the rank count). The lists are built again
+    from where the particles stood at the last build: built from where they stand now, the same
+    state goes on otherwise (measured: at step 100 and 250; at 150 and 200 no particle had changed
+    cell since the build)."""
+    import ranks_run
+
+    from gpusph_ros.sph import portable
+
+    whole = _on_ranks(3, "collapse_2d", 0.004, 250, [], tmp_path / "three.npz", "--save-at", "100", "--state",
+                      str(tmp_path / "state.npz"))
+    two = _on_ranks(2, "collapse_2d", 0.004, 150, [], tmp_path / "two.npz", "--resume", str(tmp_path / "state.npz"))
+    assert np.array_equal(two["times"], whole["times"][100:])
+    for key in ("pos", "vel", "rho"):
+        assert np.array_equal(two[key], whole[key]), key
+    state = ranks_run.load_state(tmp_path / "state.npz")
+    sc = load_scene("collapse_2d")
+    for lists_from, same in (("x_build", True), ("pos", False)):
+        model = build_run(sc, resolve(sc, dx=0.004, end_time=10.0, energy_growth_ratio=0.0))
+        solver = model.solver()
+        assert portable.mismatch(model.config, model.particles, state) == ""
+        portable.put(solver, state["particles"] | {"x_build": state["particles"][lists_from]}, state["counters"])
+        times = [solver.step() for _ in range(150)]
+        slot = np.empty(solver.n, dtype=np.int64)
+        slot[solver.ids.numpy()] = np.arange(solver.n)
+        assert np.array_equal(times, whole["times"][100:]) or not same
+        assert np.array_equal(solver.pos.numpy()[slot], whole["pos"]) == same, lists_from
+        if same:
+            for key in ("vel", "rho"):
+                assert np.array_equal(getattr(solver, key).numpy()[slot], whole[key]), key
+
+
+def test_a_state_that_is_not_the_runs_is_refused_naming_what_differs():
+    """portable.mismatch reads a state from a file before any solver takes it up: one solver's own
+    state (its particles by id, its counters) fits; an edited one is refused, saying why."""
+    from gpusph_ros.sph import portable
+
+    sc = load_scene("collapse_2d")
+    model = build_run(sc, resolve(sc, dx=0.01, end_time=10.0))
+    solver = model.solver()
+    for _ in range(5):
+        solver.step()
+    slot = np.empty(solver.n, dtype=np.int64)
+    slot[solver.ids.numpy()] = np.arange(solver.n)
+    rows = {k: a.numpy()[slot].copy() for k, a in portable.particle_arrays(solver).items()}
+    state = {"format": portable.FORMAT, "particles": rows, "counters": portable.counters(solver)}
+    assert portable.mismatch(model.config, model.particles, state) == ""
+
+    def edited(key, change, counters=False):
+        part = "counters" if counters else "particles"
+        values = dict(state[part])
+        values[key] = change(values[key].copy())
+        return portable.mismatch(model.config, model.particles, state | {part: values})
+
+    assert "mass is not the run's" in edited("mass", lambda a: a * 2.0)
+    assert "kinds are not the run's" in edited("ptype", lambda a: np.zeros_like(a))
+    assert "not a number" in edited("pos", lambda a: np.where(a == a.max(), np.nan, a))
+    assert "faster than 10 sound speeds" in edited("vel", lambda a: a + 1.0e4)
+    assert "pos is not (" in edited("pos", lambda a: a[:-1])
+    assert "rho is not (" in edited("rho", lambda a: a.astype(np.float64))
+    assert "healthy run" in edited("_steps", lambda a: a - 100, counters=True)
+    assert "not a run's state" in portable.mismatch(model.config, model.particles, {"format": "x"})

@@ -35,6 +35,7 @@ import time
 
 import numpy as np
 
+from . import portable
 from .config import ConfigError
 from .decomposition import split
 from .health import HealthError
@@ -81,7 +82,7 @@ class RankedRun:
     """This rank's part of a run of ``model`` (scenes.build.Model) on ``comm``'s ranks: its solver
     (``solver``), which particles it holds (``gid``: the run's id of each local id) and which it owns."""
 
-    def __init__(self, model, comm, rebalance: float = 0.1, rebalance_every: int = 100):
+    def __init__(self, model, comm, rebalance: float = 0.1, rebalance_every: int = 100, state: dict = None):
         from mpi4py import MPI
 
         supported(model)
@@ -90,7 +91,14 @@ class RankedRun:
         p = model.particles
         spacing = p.spacing if p.spacing is not None else np.full(len(p), cfg.dx)
         tank = [*model.scene.tank, 0.0, 0.0][:3]  # a 2D tank's third axis is none to cut along
-        self.slabs = split(p.pos, (0.0, 0.0, 0.0), tank, cfg.periodic, list_skin() * 2.0 * cfg.h, comm.size)
+        # a run going on from ``state`` (``portable()``, checked by portable.mismatch) is cut where its
+        # particles stood at the lists' last build, and each rank takes what that build's change of
+        # hands gave it
+        records = {"pos": p.pos, "vel": p.vel, "rho": p.rho, "mass": p.mass, "ptype": p.ptype, "body": p.body}
+        if state is not None:
+            records = {k: state["particles"][k] for k in records}
+        at = p.pos if state is None else state["particles"]["x_build"]
+        self.slabs = split(at, (0.0, 0.0, 0.0), tank, cfg.periodic, list_skin() * 2.0 * cfg.h, comm.size)
         self.depth = SPS_HALO_CELLS if cfg.viscosity == "sps" else HALO_CELLS
         self.first, self.end = self.slabs.bounds()[comm.rank]
         # a CUDA device is this node's GPU of the rank's own number among the node's ranks
@@ -99,11 +107,9 @@ class RankedRun:
             cfg = cfg.replace(device=f"cuda:{self.local_rank}")
         self.n = len(p)  # the run's particles, every rank's together
         fluid = p.ptype == 0
-        members, owned = self._members(p.pos, np.arange(len(p)))
+        members, owned = self._members(at, np.arange(len(p)))
         self.capacity = int(np.ceil(ROOM * len(members))) + 8
-        records = {"pos": p.pos, "vel": p.vel, "rho": p.rho, "mass": p.mass, "ptype": p.ptype, "body": p.body,
-                   "spacing": spacing}
-        part = self._particles({k: v[members] for k, v in records.items()})
+        part = self._particles({k: v[members] for k, v in (records | {"spacing": spacing}).items()})
         self.gid = self._padded(members, -1)  # the run's id of each local id; -1: a vacant slot
         self.solver = Solver(cfg, part, owned=self._padded(owned, False),
                              fluid=(float(p.mass[fluid].sum()), int(fluid.sum())))
@@ -119,6 +125,8 @@ class RankedRun:
         ghost = self.solver.ghost.numpy()
         self._ghost = np.zeros((len(p), 3), dtype=ghost.dtype)
         self._ghost[members] = ghost[:len(members)]
+        if state is not None:
+            portable.put(self.solver, {k: v[members] for k, v in state["particles"].items()}, state["counters"])
 
     # -- who holds what ----------------------------------------------------------------------
     def _members(self, pos: np.ndarray, gid: np.ndarray) -> tuple:
@@ -279,7 +287,6 @@ class RankedRun:
 
     def _migrate(self):
         """Every rank takes the particles now in its slab and halo (the module's docstring)."""
-        s = self.solver
         keys = ("pos", "vel", "rho", "mass", "ptype", "body", "hsml")
         # what it holds (its halo refreshed after the last step) and what the others hold near their
         # ends: every particle that can be in its slab or halo now
@@ -289,22 +296,24 @@ class RankedRun:
         _, first = np.unique(both["gid"], return_index=True)
         every = {k: v[first] for k, v in both.items()}
         members, owned = self._members(every["pos"], every["gid"])
-        at = np.searchsorted(every["gid"], members)  # np.unique left ``every`` in id order
+        self._take({k: v[np.searchsorted(every["gid"], members)] for k, v in every.items() if k != "gid"}, members,
+                   owned)  # np.unique left ``every`` in id order
+
+    def _take(self, fields: dict, members: np.ndarray, owned: np.ndarray):
+        """Slot k holds particle members[k] (``fields``, one row each), owned where ``owned``; the
+        other slots vacant; the lists to be built again."""
+        s = self.solver
         m = len(members)
         full = [f"rank {r}: {k} particles, more than its {c} slots" for r, (k, c) in
                 enumerate(self.comm.allgather((m, self.capacity))) if k > c]
         if full:  # on every rank: one rank's error alone would leave the others waiting for it
             raise RuntimeError("; ".join(full))
-        hdx = s.config.hdx
-        fields = {"pos": every["pos"][at], "vel": every["vel"][at], "rho": every["rho"][at],
-                  "mass": every["mass"][at], "ptype": every["ptype"][at], "body": every["body"][at],
-                  "hsml": every["hsml"][at]}
         vacant = {"pos": np.zeros(3), "vel": np.zeros(3), "rho": 1.0, "mass": 0.0, "ptype": VACANT, "body": -1,
-                  "hsml": hdx * s.config.dx}
-        for k, values in fields.items():
+                  "hsml": s.config.hdx * s.config.dx}
+        for k, fill in vacant.items():
             a = getattr(s, k).numpy()
-            a[:m] = values
-            a[m:] = vacant[k]
+            a[:m] = fields[k]
+            a[m:] = fill
             getattr(s, k).assign(a)
         s.ids.assign(np.arange(self.capacity, dtype=np.int32))
         s.fields.owned.assign(self._padded(owned.astype(np.int32), 0))
@@ -314,6 +323,21 @@ class RankedRun:
         s.ghost.assign(ghost)
         self.gid = self._padded(members, -1)
         s.neighbours.stale.fill_(1)
+
+    def portable(self) -> "dict | None":
+        """Rank 0: the run's state, whatever its cut (sph/portable.py), taken between two steps on
+        every rank together; None elsewhere."""
+        local = self._held(portable.PARTICLE_KEYS[:-1], owned_only=True)
+        s = self.solver
+        held = np.flatnonzero((s.ptype.numpy() != VACANT) & (s.fields.owned.numpy() != 0))
+        local["x_build"] = s.neighbours.x_build.numpy()[held]
+        parts = self.comm.gather((local, portable.counters(s)), root=0)
+        if parts is None:
+            return None
+        every = {k: np.concatenate([q[k] for q, _ in parts]) for k in local}
+        order = np.argsort(every.pop("gid"))
+        return {"format": portable.FORMAT, "particles": {k: every[k][order] for k in portable.PARTICLE_KEYS},
+                "counters": portable.added_up([c for _, c in parts])}
 
     def rows(self, rows: np.ndarray) -> "np.ndarray | None":
         """Rank 0: of ``rows`` (one a local id, as measure/cloud.py packs them), those of every rank's

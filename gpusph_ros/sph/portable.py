@@ -1,0 +1,150 @@
+"""A run's state that any number of ranks can take up: what a checkpoint of a run on MPI ranks
+holds (issue 69 item 4; docs/ranks.md).
+
+checkpoint.py keeps a solver's every array, in its slots and with its lists: one solver's state,
+which one solver of the same particles takes up again. A run on ranks has no one solver. What it
+holds between two steps, whatever its cut, is:
+- **each particle's state, by its id in the run:** position, velocity, density, mass, kind, body,
+  smoothing length, and where it stood when the lists were last built (``x_build``);
+- **the run's counters:** the clock, the step counts and the step loop's flags (the same on every
+  rank), the exclusions (each rank's added up, the first exclusion's time the earliest) and the
+  census (the densities' extremes; the clumped peak added up, a bound).
+
+A solver takes it up (``put``) with its particles in the order of their ids, and builds its lists
+from ``x_build``. Every neighbour sum adds its terms in the order of their cells then ids
+(neighbours.cell_keys), and the lists list the same pairs as the run's last build did. So a run
+resumed from it on any number of ranks steps on bit for bit as the run that took it
+(tests/test_ranks.py). What it does not carry: the energy check's start, which the resumed run takes
+at its first census (on ranks the check is off).
+
+A state comes from a file: ``mismatch`` checks every array's shape, dtype and range against the
+run's own particles before anything changes, as checkpoint.mismatch does.
+"""
+import numpy as np
+import warp as wp
+
+from . import health
+from .checkpoint import SPEED_LIMIT
+from .state import DT, EXCLUDED, FAILED_STEP, FLUID, N_CLOCK, N_FLAGS, N_STEPS, T
+
+FORMAT = "portable"
+PARTICLE_KEYS = ("pos", "vel", "rho", "mass", "ptype", "body", "hsml", "x_build")
+# the keys a run's own build fixes: a state of another run, or an edited one, is refused
+FIXED = ("mass", "body", "hsml")
+COUNTERS = ("_clock", "_steps", "_flags", "_excluded", "_excluded_mass", "_energy_sum")
+
+
+def is_portable(state) -> bool:
+    return isinstance(state, dict) and state.get("format") == FORMAT
+
+
+def particle_arrays(solver) -> dict:
+    """Each key's device array in ``solver``, one entry a slot."""
+    return {k: solver.neighbours.x_build if k == "x_build" else getattr(solver, k) for k in PARTICLE_KEYS}
+
+
+def counters(solver) -> dict:
+    """The solver's counters (``COUNTERS``) as host copies."""
+    wp.synchronize_device(solver.device)
+    return {k: getattr(solver, k).numpy().copy() for k in COUNTERS}
+
+
+def added_up(each: list) -> dict:
+    """The run's counters from every rank's (``counters``; the clock, steps and flags are the same on
+    all)."""
+    out = {k: each[0][k].copy() for k in ("_clock", "_steps", "_flags")}
+    out["_excluded"] = np.sum([c["_excluded"] for c in each], axis=0).astype(each[0]["_excluded"].dtype)
+    mass = np.array(health.EXCLUDED_START, dtype=np.float64)
+    for slot in (health.MASS, health.LEFT_MASS):
+        mass[slot] = sum(float(c["_excluded_mass"][slot]) for c in each)
+    first = [float(c["_excluded_mass"][health.FIRST_TIME]) for c in each
+             if c["_excluded_mass"][health.FIRST_TIME] >= 0.0]
+    mass[health.FIRST_TIME] = min(first, default=-1.0)
+    out["_excluded_mass"] = mass
+    census = np.array(health.CENSUS_START, dtype=np.float64)
+    census[health.RHO_LOW] = min(float(c["_energy_sum"][health.RHO_LOW]) for c in each)
+    census[health.RHO_HIGH] = max(float(c["_energy_sum"][health.RHO_HIGH]) for c in each)
+    census[health.PEAK_CLUMPED] = sum(float(c["_energy_sum"][health.PEAK_CLUMPED]) for c in each)
+    out["_energy_sum"] = census
+    return out
+
+
+def _layouts(config, n: int) -> tuple:
+    """({key: (shape, dtype)} of the particles, the same of the counters) of a run of ``n``
+    particles under ``config``."""
+    scalar = np.dtype(config.precision)
+    rows = {k: ((n, 3) if k in ("pos", "vel", "x_build") else (n,),
+                np.dtype(np.int32) if k in ("ptype", "body") else scalar) for k in PARTICLE_KEYS}
+    count = {"_clock": ((N_CLOCK,), np.float64), "_steps": ((N_STEPS,), np.int32), "_flags": ((N_FLAGS,), np.int32),
+             "_excluded": ((health.N_REASONS,), np.int32),
+             "_excluded_mass": ((len(health.EXCLUDED_START),), np.float64),
+             "_energy_sum": ((len(health.CENSUS_START),), np.float64)}
+    return rows, {k: (shape, np.dtype(dtype)) for k, (shape, dtype) in count.items()}
+
+
+def mismatch(config, particles, state) -> str:
+    """Why ``state`` is not a state of the run under ``config`` (sph.config) whose particles, as
+    built, are ``particles`` (sph.particles.Particles); "" when it is. Read before any solver takes
+    it up."""
+    if not is_portable(state) or set(state) != {"format", "particles", "counters"}:
+        return f"not a run's state of format {FORMAT!r}"
+    rows, count = state["particles"], state["counters"]
+    if not isinstance(rows, dict) or set(rows) != set(PARTICLE_KEYS):
+        return f"its particles are not {', '.join(PARTICLE_KEYS)}"
+    if not isinstance(count, dict) or set(count) != set(COUNTERS):
+        return f"its counters are not {', '.join(COUNTERS)}"
+    n = len(particles)
+    want_rows, want_count = _layouts(config, n)
+    for held, want, what in ((rows, want_rows, ""), (count, want_count, "counter ")):
+        for key, (shape, dtype) in want.items():
+            a = held[key]
+            if not isinstance(a, np.ndarray) or a.dtype != dtype or a.shape != shape:
+                return f"its {what}{key} is not {shape} of {dtype}"
+            # a counter may hold infinity (the step loop's target), never NaN; a particle neither
+            if a.dtype.kind == "f" and (np.isnan(a).any() if what else not np.isfinite(a).all()):
+                return f"its {what}{key} holds a value that is not a number"
+    spacing = particles.spacing if particles.spacing is not None else np.full(n, config.dx)
+    expected = {"mass": particles.mass, "body": particles.body, "hsml": config.hdx * spacing}
+    for key in FIXED:
+        if not np.array_equal(rows[key], np.asarray(expected[key]).astype(rows[key].dtype)):
+            return f"its {key} is not the run's: a state of another run or scene"
+    built = np.asarray(particles.ptype)
+    if not np.all((rows["ptype"] == built) | ((rows["ptype"] == EXCLUDED) & (built == FLUID))):
+        return "its kinds are not the run's (a fluid particle may only have been excluded)"
+    if not (rows["rho"] > 0.0).all():
+        return "its densities are not all above 0"
+    if np.linalg.norm(rows["vel"], axis=1).max(initial=0.0) > SPEED_LIMIT * config.sound_speed:
+        return f"a particle moves faster than {SPEED_LIMIT:g} sound speeds"
+    clock, steps, flags = count["_clock"], count["_steps"], count["_flags"]
+    if not (np.isfinite(clock[T]) and clock[T] >= 0.0 and np.isfinite(clock[DT]) and clock[DT] >= 0.0):
+        return "its clock is not a time and a step"
+    if (np.delete(steps, FAILED_STEP) < 0).any() or steps[FAILED_STEP] != -1:
+        return "its step counts are not counts of a healthy run"
+    if not np.isin(flags, (0, 1)).all() or (count["_excluded"] < 0).any():
+        return "its flags or exclusion counts are out of range"
+    return ""
+
+
+def put(solver, rows: dict, count: dict):
+    """``rows`` (``PARTICLE_KEYS`` of the solver's first len(rows) slots, the rest left as they are)
+    and ``count`` (``COUNTERS``) into ``solver``, a fresh one whose slot k holds its particle k; its
+    lists built from ``x_build``, as the run's last build made them, and their staleness found on
+    the positions now."""
+    m = len(rows["pos"])
+    targets = particle_arrays(solver)
+    for key in PARTICLE_KEYS:
+        a = targets[key].numpy().copy()
+        a[:m] = rows[key]
+        targets[key].assign(a)
+    needs = solver._needs_list.numpy().copy()
+    needs[:m] = solver.needs_list(rows["ptype"], rows["body"])
+    solver._needs_list.assign(needs)
+    for key in COUNTERS:
+        getattr(solver, key).assign(count[key])
+    nl = solver.neighbours
+    nl.rebuild(wp.clone(nl.x_build), force=True)
+    nl.stale.zero_()
+    nl.moved(solver.pos, solver.vel, solver.clock)
+    solver.update_pressure()
+    solver._graph.drop()
+    solver._sync()
