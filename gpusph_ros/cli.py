@@ -129,7 +129,7 @@ def run_main(argv=None):
 def _run(args, stop, comm=None) -> int:
     """gpusph-run's work, once its arguments are checked; ``stop`` is set by SIGTERM or Ctrl-C.
     ``comm``: the MPI ranks it runs on (mpiexec -n N, N > 1; sph/exchange.py): every rank steps,
-    rank 0 alone writes and speaks."""
+    rank 0 alone writes and speaks, and a run on ranks resumes on any number of ranks (sph/portable.py)."""
     from pathlib import Path
 
     from .analysis import report as R
@@ -141,11 +141,6 @@ def _run(args, stop, comm=None) -> int:
 
     root = comm is None or comm.rank == 0
     out = args.out if args.resume is None else args.resume
-    if comm is not None and args.resume is not None:
-        if root:
-            print("gpusph-run: --resume: a run on MPI ranks resumes no checkpoint yet (docs/ranks.md); resume it "
-                  "without mpiexec", file=sys.stderr)
-        return 1
     problem = None if args.resume is not None or not root else folder_problem(args.out, empty=True)
     if comm is not None:
         problem = comm.bcast(problem)
@@ -156,7 +151,7 @@ def _run(args, stop, comm=None) -> int:
     recorder, failed = None, None
     try:
         if args.resume is not None:
-            run, recorder, invocation = resume(args.resume)
+            run, recorder, invocation = resume(args.resume, comm)
         else:
             # files by absolute path: a resume may start from another folder
             def where(name):
@@ -176,29 +171,27 @@ def _run(args, stop, comm=None) -> int:
         if root:
             print(failed, file=sys.stderr)
         return 1
-    if not root:
-        return 0 if run.execute(stop=stop.is_set)["status"] == "completed" else 2
+    say = print if root else (lambda *a, **k: None)  # rank 0 speaks for the run
     for warning in run.scene.warnings:
-        print(f"gpusph-run: warning: {warning}", file=sys.stderr)
+        say(f"gpusph-run: warning: {warning}", file=sys.stderr)
     resumed = f" (resumed at t = {run.solver.time:.4g} s)" if args.resume is not None else ""
-    print(f"{run.summary()} -> {out}{resumed}", flush=True)
-    checkpoints = Checkpoints(out, invocation, recorder, run.output.checkpoint_interval)
-    every = run.output.checkpoint_interval if comm is None else 0
-    if comm is not None and run.output.checkpoint_interval:
-        print("gpusph-run: note: a run on MPI ranks writes no checkpoints yet (docs/ranks.md)", flush=True)
+    say(f"{run.summary()} -> {out}{resumed}", flush=True)
+    every = run.output.checkpoint_interval
+    checkpoints = Checkpoints(out, invocation, recorder, every, comm)
     start = time.perf_counter()
-    result = run.execute(recorder, progress=None if args.quiet else Progress(run), stop=stop.is_set,
+    result = run.execute(recorder, progress=None if args.quiet or not root else Progress(run), stop=stop.is_set,
                          checkpoints=checkpoints if every else None)
-    print(f"{result['status']}: {result['steps']} steps, t = {result['simulated_time_s']:.4g} s, wall "
-          f"{time.perf_counter() - start:.1f} s, {result['mipps']} MIPPS; {R.excluded_line(result)}; recorded "
-          f"{recorder.count} messages to {out}", flush=True)
-    if result["status"] == "completed":
+    say(f"{result['status']}: {result['steps']} steps, t = {result['simulated_time_s']:.4g} s, wall "
+        f"{time.perf_counter() - start:.1f} s, {result['mipps']} MIPPS; {R.excluded_line(result)}; recorded "
+        f"{recorder.count if root else 0} messages to {out}", flush=True)
+    if result["status"] == "completed" and root:
         checkpoints.remove()
     elif result["status"] == "interrupted" and every and not run.torn:
         try:
-            print(f"checkpoint: {checkpoints.write(run)}; continue with gpusph-run --resume {out}", flush=True)
+            written = checkpoints.write(run)
+            say(f"checkpoint: {written}; continue with gpusph-run --resume {out}", flush=True)
         except (OSError, ValueError) as err:  # a full disk, a path that is no regular file: said, not a traceback
-            print(f"gpusph-run: no checkpoint written: {err}", file=sys.stderr, flush=True)
+            say(f"gpusph-run: no checkpoint written: {err}", file=sys.stderr, flush=True)
     return 0 if result["status"] == "completed" else 2
 
 

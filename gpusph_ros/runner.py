@@ -28,9 +28,10 @@ from .measure.suite import Measurements
 from .output import frames, markers, messages, state_file
 from .scenes.build import build_run, priced
 from .scenes.settings import check_output
-from .sph import ConfigError, bodies, checkpoint
+from .sph import ConfigError, bodies, checkpoint, portable
 from .sph.config import shown
 from .sph.device import choice
+from .sph.state import T
 
 NAMESPACE = "/sim_node"
 WRENCH_TIMEOUT = 0.5  # [s] of simulated time an external wrench on a floating body is held
@@ -63,9 +64,11 @@ def outputs_by(t: float, rate: float) -> int:
 class Run:
     """One run of ``scene`` under ``run_config`` (``scenes.settings.resolve``), on one solver or, given
     ``comm`` (an MPI communicator of more than one rank), this rank's part of it (sph/exchange.py):
-    every rank steps and measures together, and rank 0 (``root``) alone gets the messages."""
+    every rank steps and measures together, and rank 0 (``root``) alone gets the messages. ``state``:
+    on ranks, the run's state (sph/portable.py, checked) each rank takes up as it is cut."""
 
-    def __init__(self, scene, run_config, namespace: str = NAMESPACE, frame_id: str = "world", comm=None):
+    def __init__(self, scene, run_config, namespace: str = NAMESPACE, frame_id: str = "world", comm=None,
+                 state: dict = None):
         self.scene, self.run_config = scene, run_config
         self.output = run_config.output
         self.namespace, self.frame_id = namespace, frame_id
@@ -75,7 +78,10 @@ class Run:
             from .measure.ranks import Across
             from .sph.exchange import RankedRun
 
-            self.ranks = RankedRun(self.model, comm)
+            problem = state is not None and portable.mismatch(self.model.config, self.model.particles, state)
+            if problem:
+                raise ValueError(f"checkpoint: {problem}")
+            self.ranks = RankedRun(self.model, comm, state=state)
             self.solver, across, self.cut = self.ranks.solver, Across(self.ranks), self.ranks.describe()
         else:
             self.solver = self.model.solver()
@@ -219,9 +225,12 @@ class Run:
         if self.torn:
             raise RuntimeError("checkpoint: the run was stopped in the middle of a step (Ctrl-C); its state "
                                "is not whole")
-        if self.ranks is not None:
-            raise RuntimeError("checkpoint: a run on MPI ranks writes none yet (docs/ranks.md)")
-        return {"format": CHECKPOINT_FORMAT, "solver": checkpoint.capture(self.solver),
+        # on ranks, every rank takes part and rank 0 gets it (None elsewhere): the run's state as any
+        # number of ranks takes it up (sph/portable.py)
+        solver = checkpoint.capture(self.solver) if self.ranks is None else self.ranks.portable()
+        if solver is None:
+            return None
+        return {"format": CHECKPOINT_FORMAT, "solver": solver,
                 "next_output": self.next_output, "wall": self.wall, "time_origin_ns": self.time_origin_ns,
                 "output": dataclasses.asdict(self.output)}
 
@@ -236,7 +245,14 @@ class Run:
         fields = {f.name for f in dataclasses.fields(self.output)}
         if not isinstance(state.get("output"), dict) or set(state["output"]) != fields:
             raise ValueError(f"checkpoint: its output settings are not {', '.join(sorted(fields))}")
-        problem = checkpoint.mismatch(self.solver, state["solver"])
+        if portable.is_portable(state["solver"]):  # a run on ranks took it
+            problem = portable.mismatch(self.model.config, self.model.particles, state["solver"])
+            t = None if problem else float(state["solver"]["counters"]["_clock"][T])
+        elif self.ranks is not None:
+            problem = "taken by one solver, it goes on on one solver only (docs/ranks.md)"
+        else:
+            problem = checkpoint.mismatch(self.solver, state["solver"])
+            t = None if problem else state["solver"]["host"]["solver"]["time"]
         if problem:
             raise ValueError(f"checkpoint: {problem}")
         try:
@@ -244,7 +260,6 @@ class Run:
         except ConfigError as err:
             raise ValueError(f"checkpoint: its output settings: {err}") from None
         next_output, wall, origin = state.get("next_output"), state.get("wall"), state.get("time_origin_ns")
-        t = state["solver"]["host"]["solver"]["time"]
         passed = outputs_by(t, output.output_rate)
         if type(next_output) is not int or next_output not in (passed - 1, passed):
             raise ValueError(f"checkpoint: its next output {shown(next_output)} is not the next after t = {t:.6g} s "
@@ -262,7 +277,11 @@ class Run:
         a state that does not fit. ``fitted``: what ``check_state(state)`` returned, when the caller
         has checked it already."""
         next_output, wall, origin, output = fitted or self.check_state(state)
-        checkpoint.put(self.solver, state["solver"])
+        if not portable.is_portable(state["solver"]):
+            checkpoint.put(self.solver, state["solver"])
+        elif self.ranks is None:
+            portable.put(self.solver, state["solver"]["particles"], state["solver"]["counters"])
+        # on ranks, each rank took the state up as it was built (Run's ``state``)
         self.measurements.restart()
         self.next_output, self.wall, self.time_origin_ns, self.output = next_output, wall, origin, output
         self._fast_from_now()
@@ -471,21 +490,26 @@ class Checkpoints:
     (``Run.checkpoint``), what rebuilds it (``invocation``: scene, run configurations, settings) and
     how much of the recording it accounts for. Written every ``interval`` seconds of wall clock at
     an output (the recording's open chunk closed first, so that the file on disk holds every message
-    the checkpoint counts) and by ``write``; replaced whole, never half-written."""
+    the checkpoint counts) and by ``write``; replaced whole, never half-written. On ``comm``'s ranks
+    every rank calls it, rank 0's clock decides when, and rank 0 (the ``recorder``'s) writes."""
 
-    def __init__(self, folder, invocation: dict, recorder, interval: float):
+    def __init__(self, folder, invocation: dict, recorder, interval: float, comm=None):
         self.path = Path(folder) / CHECKPOINT_FILE
-        self.invocation, self.recorder, self.interval = invocation, recorder, interval
+        self.invocation, self.recorder, self.interval, self.comm = invocation, recorder, interval, comm
         self._last = time.monotonic()
 
     def __call__(self, run):
-        if self.interval and time.monotonic() - self._last >= self.interval:
+        due = bool(self.interval) and time.monotonic() - self._last >= self.interval
+        if due if self.comm is None else self.comm.bcast(due):
             self.write(run)
 
-    def write(self, run) -> Path:
+    def write(self, run) -> "Path | None":
+        taken = run.checkpoint()
+        if self.recorder is None:  # a rank other than 0: it took part
+            return None
         self.recorder.flush()
         state_file.write(self.path, "checkpoint", {
-            "invocation": self.invocation, "run": run.checkpoint(),
+            "invocation": self.invocation, "run": taken,
             "recording": {"file": self.recorder.file_name, "messages": self.recorder.count}})
         self._last = time.monotonic()
         return self.path
@@ -494,8 +518,9 @@ class Checkpoints:
         self.path.unlink(missing_ok=True)
 
 
-def resume(folder):
-    """(run, recorder, invocation) continuing the recorded run in ``folder`` from its checkpoint:
+def resume(folder, comm=None):
+    """(run, recorder, invocation) continuing the recorded run in ``folder`` from its checkpoint
+    (on ``comm``'s ranks, where given: Run's; rank 0 alone gets the recorder, None elsewhere):
     the run rebuilt as it was invoked and restored; the recording's file the checkpoint counted
     cut back to what it counted (a killed run wrote on after it), any later file set aside as
     ``.superseded``, and a new file ``<name>_<k>.mcap`` opened after them. ValueError, before
@@ -522,13 +547,15 @@ def resume(folder):
         invocation, recording = state["invocation"], state["recording"]
         scene = load_scene(invocation["scene"])
         config = resolve(scene, files=invocation["run_config"], sets=invocation["sets"])
-        held = state["run"]["solver"]["host"]["solver"]["n"]
+        taken = state["run"]["solver"]
+        held = len(taken["particles"]["pos"]) if portable.is_portable(taken) else taken["host"]["solver"]["n"]
         at_most = priced(scene, config)[2]
         # a checkpoint whose settings say dx = 0.2 mm built 6.9 M particles before its arrays were refused
         if type(held) is not int or held < 1 or at_most > RESUME_PRICE_RATIO * held + RESUME_PRICE_SLACK:
             raise ValueError(f"its settings build up to {at_most:,} particles and its state holds {shown(held)}: "
                              "they are not the settings it was taken with")
-        run = Run(scene, config)
+        ranked = comm is not None and comm.size > 1
+        run = Run(scene, config, comm=comm, state=taken if ranked and portable.is_portable(taken) else None)
         run.restore(state["run"])
         counted_file, counted = recording["file"], recording["messages"]
         if not isinstance(counted_file, str) or type(counted) is not int or counted < 1:
@@ -538,6 +565,8 @@ def resume(folder):
         raise ValueError(f"--resume: {err}" if isinstance(err, ValueError) else
                          f"--resume: {path} is not a checkpoint this version wrote ({type(err).__name__}: {err})"
                          ) from None
+    if not run.root:
+        return run, None, invocation
     files = bag_files(folder)
     names = [f.name for f in files]
     if counted_file not in names:

@@ -17,6 +17,7 @@ The cases:
 - DamBreak 1 at 5 cm in 3D.
 """
 import os
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -93,23 +94,38 @@ def test_slabs_cut_again_mid_run_keep_the_run_bit_for_bit(tmp_path):
 
 
 
+def _gpusph_run_command(ranks: int, *arguments, quiet: bool = True) -> list:
+    command = [str(Path(sys.executable).parent / "gpusph-run"), *arguments, *["--quiet"] * quiet]
+    return [str(MPIEXEC), "-n", str(ranks), *command] if ranks > 1 else command
+
+
 def _gpusph_run(ranks: int, out: Path, scene: str, sets: list) -> str:
     """gpusph-run of ``scene``, under ``mpiexec -n ranks`` where ranks > 1; what it printed."""
-    command = [str(Path(sys.executable).parent / "gpusph-run"), scene, "--out", str(out), "--quiet",
-               *[f"--set={s}" for s in sets]]
-    if ranks > 1:
-        command = [str(MPIEXEC), "-n", str(ranks), *command]
-    done = subprocess.run(command, capture_output=True, text=True, timeout=300,
-                          env={**os.environ, "OMP_NUM_THREADS": "1"})
+    done = subprocess.run(_gpusph_run_command(ranks, scene, "--out", str(out), *[f"--set={s}" for s in sets]),
+                          capture_output=True, text=True, timeout=300, env={**os.environ, "OMP_NUM_THREADS": "1"})
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
     return done.stdout
+
+
+@pytest.fixture(scope="module")
+def one_rank_runs(tmp_path_factory):
+    """gpusph-run on one rank, once a module for each scene and settings asked: its bag folder."""
+    made = {}
+
+    def run(scene: str, sets: list) -> Path:
+        key = (scene, *sets)
+        if key not in made:
+            made[key] = tmp_path_factory.mktemp("one") / "bag"
+            _gpusph_run(1, made[key], scene, sets)
+        return made[key]
+    return run
 
 
 @pytest.mark.parametrize("scene, sets, metrics", [
     ("dambreak1_lab", ["dx=0.05", "end_time=0.4"], 8),
     ("lobovsky_2d", ["dx=0.02", "end_time=0.5", "shepard_every=40"], 4),
 ])
-def test_gpusph_run_on_two_ranks_records_what_one_rank_records(scene, sets, metrics, tmp_path):
+def test_gpusph_run_on_two_ranks_records_what_one_rank_records(scene, sets, metrics, tmp_path, one_rank_runs):
     """``mpiexec -n 2 gpusph-run`` (issue 69 items 4-5): the first line names the ranks and the cut,
     rank 0 records one run, and the recording is one rank's:
     - every particle cloud and every probe's, gauge's, sensor's and face load's reading bit for bit
@@ -121,10 +137,9 @@ def test_gpusph_run_on_two_ranks_records_what_one_rank_records(scene, sets, metr
     from gpusph_ros.analysis import bag
     from gpusph_ros.analysis.report import analyse
 
-    _gpusph_run(1, tmp_path / "one", scene, sets)
     said = _gpusph_run(2, tmp_path / "two", scene, sets).splitlines()[0]
     assert "2 ranks along x" in said and "rank 1 cells" in said, said
-    one, two = bag.read(tmp_path / "one"), bag.read(tmp_path / "two")
+    one, two = bag.read(one_rank_runs(scene, sets)), bag.read(tmp_path / "two")
     assert one.clock == two.clock and len(one.clouds) == len(two.clouds) > 2
     for k in range(len(one.clouds)):
         a, b = one.cloud(k), two.cloud(k)
@@ -140,7 +155,8 @@ def test_gpusph_run_on_two_ranks_records_what_one_rank_records(scene, sets, metr
                 assert np.array_equal(x, y), (topic, key)
     if "sensor_1" in str(one.series):
         assert max(np.max(s["v"]) for name, s in one.series.items() if "sensor" in name) > 1000.0  # the surge hit
-    rows = [analyse(tmp_path / name, rec=rec)[0]["metrics"] for name, rec in (("one", one), ("two", two))]
+    rows = [analyse(path, rec=rec)[0]["metrics"] for path, rec in ((one_rank_runs(scene, sets), one),
+                                                                     (tmp_path / "two", two))]
     assert [m["key"] for m in rows[0]] == [m["key"] for m in rows[1]] and len(rows[0]) >= metrics
     for a, b in zip(*rows):
         assert a["value"] == pytest.approx(b["value"], rel=1e-6, abs=1e-9, nan_ok=True), a["key"]
@@ -210,3 +226,36 @@ def test_a_state_that_is_not_the_runs_is_refused_naming_what_differs():
     assert "rho is not (" in edited("rho", lambda a: a.astype(np.float64))
     assert "healthy run" in edited("_steps", lambda a: a - 100, counters=True)
     assert "not a run's state" in portable.mismatch(model.config, model.particles, {"format": "x"})
+
+
+def test_a_run_stopped_on_three_ranks_resumes_on_two_to_one_ranks_end(tmp_path, one_rank_runs):
+    """DamBreak 1 at 5 cm under ``mpiexec -n 3 gpusph-run``, stopped by Ctrl-C (SIGINT to mpiexec,
+    which sends it to every rank): every rank stops at the same step, the bag is whole, and rank 0
+    writes the run's state (sph/portable.py). ``mpiexec -n 2 gpusph-run --resume`` goes on from it,
+    and its last cloud is one rank's uninterrupted run's, bit for bit."""
+    from gpusph_ros.analysis import bag
+
+    sets = ["dx=0.05", "end_time=0.4"]
+    out = tmp_path / "three"
+    job = subprocess.Popen(_gpusph_run_command(3, "dambreak1_lab", "--out", str(out), *[f"--set={s}" for s in sets],
+                                               quiet=False), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                           env={**os.environ, "OMP_NUM_THREADS": "1"})
+    said = ""
+    while "t = 0.1" not in said:  # a progress line at t = 0.1x s (every 2 outputs in a log): then Ctrl-C
+        line = job.stdout.readline()
+        assert line, said
+        said += line
+    job.send_signal(signal.SIGINT)
+    rest, why = job.communicate(timeout=60)
+    said += rest
+    assert job.returncode == 2 and "interrupted" in said and (out / "checkpoint.npz").is_file(), said + why
+    stopped = bag.read(out)
+    assert stopped.complete and stopped.result["status"] == "interrupted"
+    assert 0.0 < float(stopped.result["simulated_time_s"]) < 0.4
+    done = subprocess.run(_gpusph_run_command(2, "--resume", str(out)), capture_output=True, text=True, timeout=300,
+                          env={**os.environ, "OMP_NUM_THREADS": "1"})
+    assert done.returncode == 0 and "2 ranks along x" in done.stdout, done.stdout + done.stderr
+    one, resumed = bag.read(one_rank_runs("dambreak1_lab", sets)), bag.read(out)
+    assert resumed.complete and one.clock == resumed.clock
+    a, b = one.cloud(len(one.clouds) - 1), resumed.cloud(len(resumed.clouds) - 1)
+    assert a.header == b.header and bytes(a.data) == bytes(b.data)
