@@ -142,9 +142,10 @@ def rank_plan(scene, run_config, ranks: int) -> dict:
     its halo, its device memory (both, at resources.device_bytes a particle) and the bytes its halo
     takes to refresh a step. The cells are one reach wide: the kernel support, with the neighbour
     lists' skin where the run keeps lists (a list must find its neighbours in the halo until it is
-    rebuilt). A run of more than LARGE particles is cut as built at a spacing that makes about
+    rebuilt); the halo is the exchange's, decomposition.HALO_CELLS deep (SPS_HALO_CELLS under SPS).
+    A run of more than LARGE particles is cut as built at a spacing that makes about
     CALIBRATION_PARTICLES, its counts scaled to the run's spacing (a slab's as dx^-dim, a halo's,
-    one reach thick, as dx^(1-dim)); its cells are counted at the run's spacing. ConfigError on
+    a fixed number of cells thick, as dx^(1-dim)); its cells are counted at the run's spacing. ConfigError on
     ``ranks`` where a rank would have fewer than decomposition.MIN_CELLS cells."""
     cfg = run_config.solver
     n = priced(scene, run_config)[2]
@@ -164,7 +165,8 @@ def rank_plan(scene, run_config, ranks: int) -> dict:
     slabs = decomposition.split(pos, lo, hi, mc.periodic, fine, ranks, spread=spread)
     scale, thin = (dx / cfg.dx) ** scene.dim, (dx / cfg.dx) ** (scene.dim - 1)
     own = [int(round(scale * c)) for c in slabs.counts(pos, spread)]
-    halo = [int(round(thin * len(h))) for h in slabs.halos(pos, reach)]
+    depth = decomposition.SPS_HALO_CELLS if mc.viscosity == "sps" else decomposition.HALO_CELLS
+    halo = [int(round(thin * len(h))) for h in slabs.halos(pos, depth * slabs.cell * dx / cfg.dx)]
     scalar = 8 if cfg.precision == "float64" else 4
     return {"scene": scene.name, "dx": cfg.dx, "ranks": ranks, "slabs": slabs.describe(), "reach": fine,
             "scaled_from": None if dx == cfg.dx else dx, "particles": own, "halo": halo,

@@ -7,13 +7,15 @@ of whole cells, at least ``MIN_CELLS`` of them (GPUSPH's bound: a rank's halo th
 its neighbour's slab). The cuts are chosen where the particle counts balance: every particle
 counts, the walls' too, since a wall particle costs a rank memory and, near fluid, a neighbour walk.
 
-A rank's halo is the particles of other ranks in the cell just below its first and just above its
-last (across the period where the axis is periodic): all of its particles' neighbours that it does
-not own. ``exchange_bytes`` prices refreshing them: the state a force evaluation reads (position,
-velocity, density: 7 scalars) before each of a step's two evaluations (the predictor's and the
-corrector's), and, once a step, what a particle that enters a halo carries besides (mass and h: 2
-scalars; kind and body: 8 bytes; its identity: 8 bytes), priced for every halo particle (an upper
-bound: most stay in the halo from one step to the next).
+A rank's halo is the particles of other ranks within ``HALO_CELLS`` cells below its first and above
+its last (across the period where the axis is periodic; ``SPS_HALO_CELLS`` under SPS): one cell holds
+all of its particles' neighbours that it does not own, and three let it step them too, so that one
+exchange a step is enough (tests/test_halo_depth.py, sph/exchange.py). ``exchange_bytes`` prices
+that exchange: after each step, the state a force evaluation reads (position, velocity, density: 7
+scalars) of every halo particle, and what a particle that enters a halo carries besides (mass and
+h: 2 scalars; kind and body: 8 bytes; its identity: 8 bytes), priced for every halo particle every
+step (an upper bound: particles change hands only where the lists are built again, and most stay
+in the halo).
 """
 from dataclasses import dataclass
 
@@ -23,8 +25,8 @@ from .config import ConfigError
 
 MIN_CELLS = 3  # the fewest cells a rank's slab may be across (GPUSPH v5)
 STATE_SCALARS = 7  # position, velocity, density: what a force evaluation reads of a neighbour
-EVALUATIONS = 2  # force evaluations a step (predictor-corrector): a halo refresh before each
 IDENTITY_SCALARS, IDENTITY_BYTES = 2, 16  # mass, h; kind, body and the particle's id
+HALO_CELLS, SPS_HALO_CELLS = 3, 4  # a halo's depth for one exchange a step, measured: tests/test_halo_depth.py
 
 
 @dataclass(frozen=True)
@@ -174,4 +176,4 @@ def _below(slabs: Slabs, pos: np.ndarray, spread: float) -> np.ndarray:
 def exchange_bytes(halo: int, scalar_bytes: int) -> int:
     """The bytes one rank receives a step to refresh a halo of ``halo`` particles (the module's
     docstring): its state before each force evaluation and, once, what a particle carries with it."""
-    return halo * (EVALUATIONS * STATE_SCALARS * scalar_bytes + IDENTITY_SCALARS * scalar_bytes + IDENTITY_BYTES)
+    return halo * (STATE_SCALARS * scalar_bytes + IDENTITY_SCALARS * scalar_bytes + IDENTITY_BYTES)

@@ -37,14 +37,13 @@ import numpy as np
 
 from . import portable
 from .config import ConfigError
-from .decomposition import split
+from .decomposition import HALO_CELLS, SPS_HALO_CELLS, split
 from .health import HealthError
 from .neighbours import list_skin
 from .particles import Particles
 from .solver import Solver
 from .state import REORDER_DUE, VACANT
 
-HALO_CELLS, SPS_HALO_CELLS = 3, 4  # measured: tests/test_halo_depth.py
 ROOM = 1.5  # slots a rank keeps over its first particle count: a flow brings it more than it starts with
 
 
