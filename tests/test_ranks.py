@@ -40,6 +40,13 @@ PERIODIC = {"name": "periodic_collapse", "dim": 2, "tank": [0.6, 0.3], "periodic
             "walls": "particles", "fluid": [{"name": "water", "lo": [0.0, 0.0], "hi": [0.15, 0.15]}]}
 
 
+def _slots(solver) -> np.ndarray:
+    """The slot of each particle id."""
+    slot = np.empty(solver.n, dtype=np.int64)
+    slot[solver.ids.numpy()] = np.arange(solver.n)
+    return slot
+
+
 def _one_rank(scene, dx: float, steps: int, sets: list) -> dict:
     sc = load_scene(scene)
     solver = build_run(sc, resolve(sc, sets=sets, dx=dx, end_time=10.0, energy_growth_ratio=0.0)).solver()
@@ -196,7 +203,9 @@ def test_a_state_taken_on_three_ranks_goes_on_bit_for_bit_on_two_and_on_one(tmp_
 
 def test_a_state_that_is_not_the_runs_is_refused_naming_what_differs():
     """portable.mismatch reads a state from a file before any solver takes it up: one solver's own
-    state (its particles by id, its counters) fits; an edited one is refused, saying why."""
+    state (its particles by id, its counters) fits, and put back into the same solver 10 steps
+    later (its slots sorted since) it steps the same 10 steps again, bit for bit; an edited one is
+    refused, saying why."""
     from gpusph_ros.sph import portable
 
     sc = load_scene("collapse_2d")
@@ -204,11 +213,15 @@ def test_a_state_that_is_not_the_runs_is_refused_naming_what_differs():
     solver = model.solver()
     for _ in range(5):
         solver.step()
-    slot = np.empty(solver.n, dtype=np.int64)
-    slot[solver.ids.numpy()] = np.arange(solver.n)
-    rows = {k: a.numpy()[slot].copy() for k, a in portable.particle_arrays(solver).items()}
+    rows = {k: a.numpy()[_slots(solver)].copy() for k, a in portable.particle_arrays(solver).items()}
     state = {"format": portable.FORMAT, "particles": rows, "counters": portable.counters(solver)}
     assert portable.mismatch(model.config, model.particles, state) == ""
+    first = [solver.step() for _ in range(10)]
+    ahead = {k: getattr(solver, k).numpy()[_slots(solver)].copy() for k in ("pos", "vel", "rho")}
+    portable.put(solver, state["particles"], state["counters"])
+    assert [solver.step() for _ in range(10)] == first
+    for key, values in ahead.items():
+        assert np.array_equal(getattr(solver, key).numpy()[_slots(solver)], values), key
 
     def edited(key, change, counters=False):
         part = "counters" if counters else "particles"

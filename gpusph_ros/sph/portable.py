@@ -126,10 +126,15 @@ def mismatch(config, particles, state) -> str:
 
 
 def put(solver, rows: dict, count: dict):
-    """``rows`` (``PARTICLE_KEYS`` of the solver's first len(rows) slots, the rest left as they are)
-    and ``count`` (``COUNTERS``) into ``solver``, a fresh one whose slot k holds its particle k; its
-    lists built from ``x_build``, as the run's last build made them, and their staleness found on
-    the positions now."""
+    """``rows`` (``PARTICLE_KEYS`` of the solver's particles 0 .. len(rows) - 1, the rest left as they
+    are) and ``count`` (``COUNTERS``) into ``solver``, its particles first put back in the order of
+    their ids (a solver that has stepped has sorted them); its lists built from ``x_build``, as the
+    run's last build made them, and their staleness found on the positions now."""
+    ids = solver.ids.numpy()
+    if not np.array_equal(ids, np.arange(len(ids))):
+        slot = np.empty(len(ids), dtype=np.int64)
+        slot[ids] = np.arange(len(ids))
+        solver.permute(slot)  # every per-slot array with it: the walls' ghost offsets, a rank's marks
     m = len(rows["pos"])
     targets = particle_arrays(solver)
     for key in PARTICLE_KEYS:
