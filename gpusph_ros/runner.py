@@ -455,19 +455,12 @@ class Run:
                 "left_tank_fraction": float(shares[1])}
 
     def health_peaks(self) -> dict:
-        """Solver.health_peaks, on ranks of the whole run: the extremes of every rank's, and the sum of
-        their clumped fractions' peaks (a bound on the run's: each rank's peak may fall at another
-        census). The energy check is off on ranks (sph/exchange.py): no energy growth."""
-        peaks, across = self.solver.health_peaks, self.measurements.across
-        if self.ranks is not None:
+        """Solver.health_peaks. On ranks every rank's census is the whole run's (sph/exchange.py), but
+        for the energy under repulsive walls, which ranks do not measure."""
+        peaks = self.solver.health_peaks
+        if self.ranks is not None and self.ranks.energy_off:
             peaks["peak_energy_growth"] = None
-        ways = {"peak_clumped_fraction": (across.total, 0.0), "min_density_ratio": (across.least, math.inf),
-                "max_density_ratio": (across.most, -math.inf), "peak_energy_growth": (across.most, -math.inf)}
-        out = {}
-        for key, (way, none) in ways.items():
-            value = float(way(np.array([none if peaks[key] is None else peaks[key]]))[0])
-            out[key] = None if math.isinf(value) else value  # none of the ranks had one
-        return out
+        return peaks
 
     def result(self, status: str) -> dict:
         """The result record a recording closes with."""

@@ -138,7 +138,9 @@ def test_gpusph_run_on_two_ranks_records_what_one_rank_records(scene, sets, metr
       step, after the halo's refresh on ranks and after the Shepard filter on both;
     - every sum over particles (the wrench, the pressure blocks) within 1e-6 of the series' largest
       value: each rank sums its own particles, and the ranks' sums are added in another order;
-    - gpusph-analyze's metrics the same (within 1e-6: the forces are sums)."""
+    - gpusph-analyze's metrics the same (within 1e-6: the forces are sums);
+    - the health census the run's: the clumped peak and the density's extremes equal, the energy's
+      growth within 1e-6 (each rank's energy added in rank order)."""
     from gpusph_ros.analysis import bag
     from gpusph_ros.analysis.report import analyse
 
@@ -160,6 +162,10 @@ def test_gpusph_run_on_two_ranks_records_what_one_rank_records(scene, sets, metr
                 assert np.array_equal(x, y), (topic, key)
     if "sensor_1" in str(one.series):
         assert max(np.max(s["v"]) for name, s in one.series.items() if "sensor" in name) > 1000.0  # the surge hit
+    for key in ("peak_clumped_fraction", "min_density_ratio", "max_density_ratio"):  # the census is the run's
+        assert one.result[key] == two.result[key], key
+    assert float(one.result["peak_energy_growth"]) == pytest.approx(float(two.result["peak_energy_growth"]),
+                                                                      rel=1e-6, abs=1e-12)
     rows = [analyse(path, rec=rec)[0]["metrics"] for path, rec in ((one_rank_runs(scene, sets), one),
                                                                      (tmp_path / "two", two))]
     assert [m["key"] for m in rows[0]] == [m["key"] for m in rows[1]] and len(rows[0]) >= metrics
@@ -271,3 +277,22 @@ def test_a_run_stopped_on_two_ranks_resumes_on_one_to_one_ranks_end(tmp_path, on
     assert resumed.complete and one.clock == resumed.clock
     a, b = one.cloud(len(one.clouds) - 1), resumed.cloud(len(resumed.clouds) - 1)
     assert a.header == b.header and bytes(a.data) == bytes(b.data)
+
+
+def test_a_check_on_the_whole_run_fails_every_rank_as_it_fails_one(tmp_path):
+    """The energy check on the census of every rank (sph/exchange.py, Solver.each_census): with a
+    slack of 2e-5 M g H, DamBreak 1 at 5 cm fails it at the same step, with the same message, on 2
+    ranks as on one, and both bags close whole with that status."""
+    from gpusph_ros.analysis import bag
+
+    status = []
+    for ranks in (1, 2):
+        out = tmp_path / f"bag{ranks}"
+        done = subprocess.run(_gpusph_run_command(ranks, "dambreak1_lab", "--out", str(out), "--set=dx=0.05",
+                                                  "--set=end_time=0.4", "--set=energy_growth_ratio=0.00002"),
+                              capture_output=True, text=True, timeout=300, env={**os.environ, "OMP_NUM_THREADS": "1"})
+        assert done.returncode == 2, done.stdout + done.stderr
+        rec = bag.read(out)
+        assert rec.complete
+        status.append(rec.result["status"])
+    assert status[0] == status[1] and "health check 'energy_growth' failed at step" in status[0], status

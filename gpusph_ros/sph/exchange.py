@@ -24,7 +24,12 @@
 What this first form leaves out:
 - bodies, refinement zones and ``wall_flux: normal``, refused by name (``supported``): their state
   is kept by particle id across the run;
-- the energy check, whose sum is not yet all-reduced: energy_growth_ratio is 0 on ranks.
+- the energy check under repulsive walls (lennard_jones, monaghan_kajtar), whose walls' energy is
+  summed over every pair a rank holds: energy_growth_ratio is 0 on ranks there.
+
+The census (the energy, the density's extremes, the clumped particles) is every rank's, gathered
+and added in rank order on every rank before its check (Solver.each_census): the energy check and
+the clumping check decide alike everywhere, on the whole run's figures.
 
 Each rank sends every other rank the owned particles within ``depth`` + 1 cells of its slab's ends
 (an all-gather): the neighbours alone need them, and a point-to-point exchange with each neighbour
@@ -35,7 +40,8 @@ import time
 
 import numpy as np
 
-from . import portable
+from . import health, portable
+from .boundaries import model as boundary_model
 from .config import ConfigError
 from .decomposition import HALO_CELLS, SPS_HALO_CELLS, split
 from .health import HealthError
@@ -86,7 +92,11 @@ class RankedRun:
 
         supported(model)
         self.comm, self._max, self._sum = comm, MPI.MAX, MPI.SUM
-        cfg = model.config.replace(energy_growth_ratio=0.0)
+        cfg = model.config
+        # the repulsive walls' potential energy is summed over every pair a rank holds, its halo's too
+        self.energy_off = boundary_model(cfg.boundary).repulsive
+        if self.energy_off:
+            cfg = cfg.replace(energy_growth_ratio=0.0)
         p = model.particles
         spacing = p.spacing if p.spacing is not None else np.full(len(p), cfg.dx)
         tank = [*model.scene.tank, 0.0, 0.0][:3]  # a 2D tank's third axis is none to cut along
@@ -113,6 +123,7 @@ class RankedRun:
         self.solver = Solver(cfg, part, owned=self._padded(owned, False),
                              fluid=(float(p.mass[fluid].sum()), int(fluid.sum())))
         self.solver.each_dt(self._all_maxima)
+        self.solver.each_census(self._all_census)
         # a change of hands recuts the slabs where the fullest rank owns more than ``rebalance`` over
         # the mean, at most every ``rebalance_every`` steps (issue 69 item 3)
         self.rebalance, self.rebalance_every, self._recut_at = rebalance, rebalance_every, 0
@@ -165,6 +176,22 @@ class RankedRun:
         m[:] = 0.0
         m[0], m[1] = every
         maxima.assign(m)
+
+    def _all_census(self, totals, counts):
+        """Every rank's census in each rank's: the energies added, the density's extremes, the
+        clumped particles added and the first of them by its run id."""
+        e, c = totals.numpy().copy(), counts.numpy().copy()
+        first = c[health.FIRST_CLUMPED]
+        first = health.NO_FAILURE if first == health.NO_FAILURE else int(self.gid[first])
+        # gathered and added in rank order on every rank: the same float64 sum everywhere, so that
+        # every rank's check decides alike
+        parts = self.comm.allgather((float(e[health.ENERGY]), float(e[health.RHO_LOW]), float(e[health.RHO_HIGH]),
+                                     int(c[health.CLUMPED]), first))
+        energy, low, high, clumped, first = zip(*parts)
+        e[health.ENERGY], e[health.RHO_LOW], e[health.RHO_HIGH] = sum(energy), min(low), max(high)
+        c[health.CLUMPED], c[health.FIRST_CLUMPED] = sum(clumped), min(first)
+        totals.assign(e)
+        counts.assign(c)
 
     def _held(self, keys, owned_only: bool, near_ends: bool = False) -> dict:
         """This rank's particles (its owned ones only where ``owned_only``): ``keys`` of their state
@@ -229,14 +256,21 @@ class RankedRun:
             if stale:
                 s.neighbours.stale.fill_(1)
         self.exchange_s += time.perf_counter() - start
-        failed = ""
+        failed = None
         try:
             s.step(t_target)
         except HealthError as err:
-            failed = str(err)
+            # a particle's check names its local id, the run's id said instead; a census names the
+            # run's already (_all_census), an exclusion limit none
+            local = err.particle >= 0 and err.check != "clumping"
+            failed = (err.check, err.step, err.time, int(self.gid[err.particle]) if local else err.particle,
+                      err.detail)
         why = self.comm.allgather(failed)
-        if any(why):
-            raise HealthError("; ".join(f"rank {r}: {w}" for r, w in enumerate(why) if w))
+        ranks = [r for r, w in enumerate(why) if w]
+        if ranks:  # every rank raises the first failing rank's failure, and says which ranks found one
+            check, step, t, particle, detail = why[ranks[0]]
+            where = "" if len(ranks) == len(why) else f" (found on rank {', '.join(map(str, ranks))})"
+            raise HealthError(check, step, t, particle, detail + where)
         start = time.perf_counter()
         self._refresh()
         self.exchange_s += time.perf_counter() - start

@@ -110,6 +110,7 @@ class HealthError(RuntimeError):
         self.step = step
         self.time = time
         self.particle = particle
+        self.detail = detail
         super().__init__(f"health check '{check}' failed at step {step} (t = {time:.6g} s), "
                          f"particle {particle}{': ' + detail if detail else ''}")
 

@@ -6,16 +6,15 @@ which one solver of the same particles takes up again. A run on ranks has no one
 holds between two steps, whatever its cut, is:
 - **each particle's state, by its id in the run:** position, velocity, density, mass, kind, body,
   smoothing length, and where it stood when the lists were last built (``x_build``);
-- **the run's counters:** the clock, the step counts and the step loop's flags (the same on every
-  rank), the exclusions (each rank's added up, the first exclusion's time the earliest) and the
-  census (the densities' extremes; the clumped peak added up, a bound).
+- **the run's counters:** the clock, the step counts, the step loop's flags and the census (the
+  same on every rank: ranks check the whole run's census, sph/exchange.py), and the exclusions
+  (each rank's added up, the first exclusion's time the earliest).
 
 A solver takes it up (``put``) with its particles in the order of their ids, and builds its lists
 from ``x_build``. Every neighbour sum adds its terms in the order of their cells then ids
 (neighbours.cell_keys), and the lists list the same pairs as the run's last build did. So a run
 resumed from it on any number of ranks steps on bit for bit as the run that took it
-(tests/test_ranks.py). What it does not carry: the energy check's start, which the resumed run takes
-at its first census (on ranks the check is off).
+(tests/test_ranks.py).
 
 A state comes from a file: ``mismatch`` checks every array's shape, dtype and range against the
 run's own particles before anything changes, as checkpoint.mismatch does.
@@ -50,9 +49,9 @@ def counters(solver) -> dict:
 
 
 def added_up(each: list) -> dict:
-    """The run's counters from every rank's (``counters``; the clock, steps and flags are the same on
-    all)."""
-    out = {k: each[0][k].copy() for k in ("_clock", "_steps", "_flags")}
+    """The run's counters from every rank's (``counters``; the clock, steps, flags and census are the
+    same on all)."""
+    out = {k: each[0][k].copy() for k in ("_clock", "_steps", "_flags", "_energy_sum")}
     out["_excluded"] = np.sum([c["_excluded"] for c in each], axis=0).astype(each[0]["_excluded"].dtype)
     mass = np.array(health.EXCLUDED_START, dtype=np.float64)
     for slot in (health.MASS, health.LEFT_MASS):
@@ -61,11 +60,6 @@ def added_up(each: list) -> dict:
              if c["_excluded_mass"][health.FIRST_TIME] >= 0.0]
     mass[health.FIRST_TIME] = min(first, default=-1.0)
     out["_excluded_mass"] = mass
-    census = np.array(health.CENSUS_START, dtype=np.float64)
-    census[health.RHO_LOW] = min(float(c["_energy_sum"][health.RHO_LOW]) for c in each)
-    census[health.RHO_HIGH] = max(float(c["_energy_sum"][health.RHO_HIGH]) for c in each)
-    census[health.PEAK_CLUMPED] = sum(float(c["_energy_sum"][health.PEAK_CLUMPED]) for c in each)
-    out["_energy_sum"] = census
     return out
 
 

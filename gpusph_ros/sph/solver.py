@@ -134,6 +134,7 @@ class Solver:
             self.clear_failure()
         self._step_hooks = []
         self._dt_hooks = []
+        self._census_hooks = []
         self._graph = graph.LoopGraph(self)
         self.time, self.dt, self.dt_stable, self.steps = 0.0, 0.0, 0.0, 0
         self._excluded_host = (np.zeros(health.N_REASONS, dtype=np.int32), np.array(health.EXCLUDED_START))
@@ -515,6 +516,8 @@ class Solver:
             self.launch(k.wall_energy, part.count, [p, nl.grid, nl.walk, self._pos_c, self.mass, self.ptype,
                                                     *part.args()])
             part.total(self._energy_sum, health.ENERGY, add=True)
+        for hook in self._census_hooks:
+            hook(self._energy_sum, self._clump_count)
         wp.launch(k.census_check, dim=1, inputs=[p, self._energy_sum, self._clump_count, self._fail],
                   device=self.device)
 
@@ -532,6 +535,13 @@ class Solver:
         puts every rank's there (an all-reduce). The hook reads the device, so a solver with one
         steps only with ``step``, as the host drives a rank's steps."""
         self._dt_hooks.append(hook)
+
+    def each_census(self, hook):
+        """Call ``hook(totals, counts)`` in every census between its sums and its check (health.census:
+        the energy, the density's extremes, the clumped count and the first clumped id), so that a
+        rank checks every rank's (an all-reduce): the run fails or goes on as one. The hook reads
+        the device, as each_dt's does."""
+        self._census_hooks.append(hook)
 
     @property
     def clock(self):
