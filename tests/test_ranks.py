@@ -66,9 +66,9 @@ def _on_ranks(ranks: int, scene, dx: float, steps: int, sets: list, out: Path, *
 
 
 @pytest.mark.parametrize("scene, dx, steps, sets, ranks", [
-    ("collapse_2d", 0.004, 200, ["boundary=mdbc", "shifting=true"], (2,)),
-    ("collapse_2d", 0.004, 200, ["viscosity=sps"], (3,)),
-    ("periodic", 0.005, 200, [], (3,)),
+    ("collapse_2d", 0.004, 150, ["boundary=mdbc", "shifting=true"], (2,)),
+    ("collapse_2d", 0.004, 150, ["viscosity=sps"], (3,)),
+    ("periodic", 0.005, 150, [], (3,)),
 ])
 def test_a_run_on_ranks_steps_bit_for_bit_as_on_one(scene, dx, steps, sets, ranks, tmp_path):
     if scene == "periodic":
@@ -127,7 +127,7 @@ def one_rank_runs(tmp_path_factory):
 
 
 @pytest.mark.parametrize("scene, sets, metrics", [
-    ("dambreak1_lab", ["dx=0.05", "end_time=0.4"], 8),
+    ("dambreak1_lab", ["dx=0.05", "end_time=0.3"], 8),
     ("lobovsky_2d", ["dx=0.025", "end_time=0.5", "shepard_every=40", "output_rate=200"], 4),
 ])
 def test_gpusph_run_on_two_ranks_records_what_one_rank_records(scene, sets, metrics, tmp_path, one_rank_runs):
@@ -253,7 +253,7 @@ def test_a_run_stopped_on_two_ranks_resumes_on_one_to_one_ranks_end(tmp_path, on
     above)."""
     from gpusph_ros.analysis import bag
 
-    sets = ["dx=0.05", "end_time=0.4"]
+    sets = ["dx=0.05", "end_time=0.3"]
     out = tmp_path / "three"
     job = subprocess.Popen(_gpusph_run_command(2, "dambreak1_lab", "--out", str(out), *[f"--set={s}" for s in sets],
                                                quiet=False), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
@@ -269,7 +269,7 @@ def test_a_run_stopped_on_two_ranks_resumes_on_one_to_one_ranks_end(tmp_path, on
     assert job.returncode == 2 and "interrupted" in said and (out / "checkpoint.npz").is_file(), said + why
     stopped = bag.read(out)
     assert stopped.complete and stopped.result["status"] == "interrupted"
-    assert 0.0 < float(stopped.result["simulated_time_s"]) < 0.4
+    assert 0.0 < float(stopped.result["simulated_time_s"]) < 0.3
     done = subprocess.run(_gpusph_run_command(1, "--resume", str(out)), capture_output=True, text=True, timeout=300,
                           env={**os.environ, "OMP_NUM_THREADS": "1"})
     assert done.returncode == 0 and "resumed at t = 0.1" in done.stdout, done.stdout + done.stderr
@@ -289,7 +289,7 @@ def test_a_check_on_the_whole_run_fails_every_rank_as_it_fails_one(tmp_path):
     for ranks in (1, 2):
         out = tmp_path / f"bag{ranks}"
         done = subprocess.run(_gpusph_run_command(ranks, "dambreak1_lab", "--out", str(out), "--set=dx=0.05",
-                                                  "--set=end_time=0.4", "--set=energy_growth_ratio=0.00002"),
+                                                  "--set=end_time=0.3", "--set=energy_growth_ratio=0.00002"),
                               capture_output=True, text=True, timeout=300, env={**os.environ, "OMP_NUM_THREADS": "1"})
         assert done.returncode == 2, done.stdout + done.stderr
         rec = bag.read(out)
