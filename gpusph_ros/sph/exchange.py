@@ -211,8 +211,9 @@ class RankedRun:
             keep &= ~deep
         mine = np.flatnonzero(keep)
         local = {"gid": self.gid[ids[mine]]}
+        arrays = portable.particle_arrays(s)  # each key's array, x_build's among them
         for k in keys:
-            local[k] = getattr(s, k).numpy()[mine]
+            local[k] = arrays[k].numpy()[mine]
         return local
 
     def _gathered(self, local: dict) -> dict:
@@ -360,11 +361,8 @@ class RankedRun:
     def portable(self) -> "dict | None":
         """Rank 0: the run's state, whatever its cut (sph/portable.py), taken between two steps on
         every rank together; None elsewhere."""
-        local = self._held(portable.PARTICLE_KEYS[:-1], owned_only=True)
-        s = self.solver
-        held = np.flatnonzero((s.ptype.numpy() != VACANT) & (s.fields.owned.numpy() != 0))
-        local["x_build"] = s.neighbours.x_build.numpy()[held]
-        parts = self.comm.gather((local, portable.counters(s)), root=0)
+        local = self._held(portable.PARTICLE_KEYS, owned_only=True)
+        parts = self.comm.gather((local, portable.counters(self.solver)), root=0)
         if parts is None:
             return None
         every = {k: np.concatenate([q[k] for q, _ in parts]) for k in local}
