@@ -5,7 +5,12 @@ density range of Tait's law over the depth).
 
 Settling: for the first 0.4 s velocities relax with a 0.02 s time constant, so that a column on
 force-based walls (which bounces on them like a spring) comes to rest; then the tank runs free
-for 0.1 s and the pressure is averaged over 5 samples in the last 0.2 s.
+for 0.1 s and the pressure is averaged over 5 samples in the last 0.2 s. A 3D tank on walls that
+carry a density (or planes) settles sooner: 0.25 s, free for 0.05 s, 5 samples in 0.15 s. Measured
+(2026-12-08) against the longer schedule, its three depth bins moved by at most 0.2% of rho0 g d
+(dynamic, planes, mDBC, Adami: +1.3/+1.7/+2.0%); on the repulsive walls, still bouncing, by up to
+3.0% (Lennard-Jones -2.1/+2.0/+3.8% against +1.0/+0.7/+0.8%), so they keep the longer one. The 3D
+runs are most of the file's time.
 
 Reference: hydrostatics, p = rho0 g d. Walls: Crespo et al. 2007 (dynamic), English et al. 2021
 (mdbc), Adami et al. 2012 (adami), Monaghan 1994 (Lennard-Jones), Monaghan & Kajtar 2009,
@@ -22,8 +27,13 @@ from conftest import hydrostatic_errors
 pytestmark = pytest.mark.physics
 
 DX = 0.01
-SETTLE_UNTIL, SETTLE_TAU = 0.4, 0.02
-START, END, SAMPLES = 0.5, 0.7, 5
+SETTLE_TAU, SAMPLES = 0.02, 5
+# (settled at, first sample at, last sample at) [s]: the module's docstring
+SCHEDULE, SOONER = (0.4, 0.5, 0.7), (0.25, 0.3, 0.45)
+
+
+def schedule(dim: int, boundary: str) -> tuple:
+    return SOONER if dim == 3 and not boundaries.model(boundary).repulsive else SCHEDULE
 
 
 def tank(dim, boundary, walls, precision):
@@ -34,7 +44,7 @@ def tank(dim, boundary, walls, precision):
         depth, size, g, periodic = 0.15, (0.14, 0.09, 0.18), (0.0, 0.0, -9.81), (False, True, False)
     fluid = ((0.0,) * dim, size[:dim - 1] + (depth,))
     cfg = SolverConfig(dim=dim, dx=DX, gravity=g, depth=depth, boundary=boundary, precision=precision,
-                       periodic=periodic, settle_tau=SETTLE_TAU, settle_until=SETTLE_UNTIL)
+                       periodic=periodic, settle_tau=SETTLE_TAU, settle_until=schedule(dim, boundary)[0])
     cfg, parts = box_tank(cfg, size, [fluid], walls=walls)
     return cfg, parts, depth, size
 
@@ -53,9 +63,10 @@ def test_hydrostatic_pressure(dim, boundary, walls, precision):
     solver = Solver(cfg, parts)
     fluid = parts.ptype == 0
     volume0 = (parts.mass[fluid] / parts.rho[fluid]).sum()
-    solver.advance(START)
+    _, start, end = schedule(dim, boundary)
+    solver.advance(start)
     errors = []
-    for t in np.linspace(START, END, SAMPLES + 1)[1:]:
+    for t in np.linspace(start, end, SAMPLES + 1)[1:]:
         solver.advance(float(t))
         snap = solver.snapshot()
         x = snap["pos"][snap["ptype"] == 0]
