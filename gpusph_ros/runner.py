@@ -280,7 +280,8 @@ class Run:
         if not portable.is_portable(state["solver"]):
             checkpoint.put(self.solver, state["solver"])
         elif self.ranks is None:
-            portable.put(self.solver, state["solver"]["particles"], state["solver"]["counters"])
+            portable.put(self.solver, state["solver"]["particles"], state["solver"]["counters"],
+                         state["solver"]["bodies"])
         # on ranks, each rank took the state up as it was built (Run's ``state``)
         self.measurements.restart()
         self.next_output, self.wall, self.time_origin_ns, self.output = next_output, wall, origin, output

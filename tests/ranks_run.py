@@ -17,8 +17,8 @@ from mpi4py import MPI
 
 def save_state(path, state):
     if state is not None:
-        np.savez(path, **{f"particles.{k}": v for k, v in state["particles"].items()},
-                 **{f"counters.{k}": v for k, v in state["counters"].items()})
+        np.savez(path, **{f"{part}.{k}": v for part in ("particles", "counters", "bodies")
+                          for k, v in state[part].items()})
 
 
 def load_state(path) -> dict:
@@ -26,7 +26,8 @@ def load_state(path) -> dict:
 
     with np.load(path) as f:
         return {"format": portable.FORMAT, "particles": {k: f[f"particles.{k}"] for k in portable.PARTICLE_KEYS},
-                "counters": {k: f[f"counters.{k}"] for k in portable.COUNTERS}}
+                "counters": {k: f[f"counters.{k}"] for k in portable.COUNTERS},
+                "bodies": {k: f[f"bodies.{k}"] for k in portable.BODIES if f"bodies.{k}" in f}}
 
 
 def main():

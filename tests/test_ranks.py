@@ -14,6 +14,8 @@ The cases:
 - the collapse under mDBC with shifting, and under SPS (its halo a cell deeper);
 - a collapse in a tank periodic along the cut axis (the water crosses the period and the first and
   last ranks meet across it);
+- a piston paddle and a floating box across the cuts, on the extrapolated-pressure wall (whose
+  moving walls' acceleration changes hands with their particles);
 - DamBreak 1 at 5 cm in 3D, recorded by gpusph-run (below: every cloud bit for bit).
 """
 import os
@@ -38,6 +40,15 @@ sys.path.insert(0, str(HERE))  # ranks_run, its state files
 MPIEXEC = Path(sys.executable).parent / "mpiexec"
 PERIODIC = {"name": "periodic_collapse", "dim": 2, "tank": [0.6, 0.3], "periodic": [True, False],
             "walls": "particles", "fluid": [{"name": "water", "lo": [0.0, 0.0], "hi": [0.15, 0.15]}]}
+# a piston paddle on a sinusoid pushes still water under a floating box 16 cm wide, which every cut
+# of 2 or 3 ranks crosses
+BODIES = {"name": "bodies_on_ranks", "dim": 2, "tank": [0.6, 0.3], "walls": "particles",
+          "fluid": [{"name": "water", "lo": [0.06, 0.0], "hi": [0.6, 0.12]}],
+          "obstacles": [{"name": "paddle", "lo": [0.02, 0.0], "hi": [0.05, 0.2],
+                         "motion": {"type": "sinusoid", "amplitude": [0.015, 0.0], "period": 0.1, "phase_deg": -90.0}},
+                        {"name": "box", "lo": [0.22, 0.08], "hi": [0.38, 0.16], "displaces_fluid": True,
+                         "floating": {"density": 400.0}}]}
+SCENES = {"periodic": PERIODIC, "bodies": BODIES}
 
 
 def _slots(solver) -> np.ndarray:
@@ -45,6 +56,12 @@ def _slots(solver) -> np.ndarray:
     slot = np.empty(solver.n, dtype=np.int64)
     slot[solver.ids.numpy()] = np.arange(solver.n)
     return slot
+
+
+def _built(scene, dx: float, sets: list):
+    """The particles of ``scene`` as built at ``dx`` under ``sets``."""
+    sc = load_scene(scene)
+    return build_run(sc, resolve(sc, sets=sets, dx=dx, end_time=10.0)).particles
 
 
 def _one_rank(scene, dx: float, steps: int, sets: list) -> dict:
@@ -69,15 +86,25 @@ def _on_ranks(ranks: int, scene, dx: float, steps: int, sets: list, out: Path, *
     ("collapse_2d", 0.004, 150, ["boundary=mdbc", "shifting=true"], (2,)),
     ("collapse_2d", 0.004, 150, ["viscosity=sps"], (3,)),
     ("periodic", 0.005, 150, [], (3,)),
+    ("bodies", 0.005, 150, ["boundary=adami"], (3,)),
 ])
 def test_a_run_on_ranks_steps_bit_for_bit_as_on_one(scene, dx, steps, sets, ranks, tmp_path):
-    if scene == "periodic":
-        scene = tmp_path / "periodic.yaml"
-        scene.write_text(yaml.safe_dump(PERIODIC))
+    name = scene
+    if name in SCENES:
+        scene = tmp_path / f"{name}.yaml"
+        scene.write_text(yaml.safe_dump(SCENES[name]))
     one = _one_rank(scene, dx, steps, sets)
     assert np.abs(one["vel"]).max() > 0.3  # the water moves
-    for n in ranks:
-        many = _on_ranks(n, scene, dx, steps, sets, tmp_path / f"ranks{n}.npz")
+    runs = {n: _on_ranks(n, scene, dx, steps, sets, tmp_path / f"ranks{n}.npz") for n in ranks}
+    if name == "bodies":
+        # the floating box moves, and a state taken on 3 ranks (its bodies' with it) goes on on 2
+        box = _built(scene, dx, sets).body == 1
+        assert np.abs(one["vel"][box]).max() > 1.0e-3
+        state = str(tmp_path / "state.npz")
+        _on_ranks(3, scene, dx, 60, sets, tmp_path / "first.npz", "--save-at", "59", "--state", state)
+        resumed = _on_ranks(2, scene, dx, steps - 59, sets, tmp_path / "resumed.npz", "--resume", state)
+        runs["2 from a state of 3"] = resumed | {"times": np.concatenate([one["times"][:59], resumed["times"]])}
+    for n, many in runs.items():
         assert np.array_equal(many["gid"], np.arange(len(one["pos"]))), n
         assert np.array_equal(many["times"], one["times"]), n
         for key in ("pos", "vel", "rho"):
@@ -196,7 +223,8 @@ def test_a_state_taken_on_three_ranks_goes_on_bit_for_bit_on_two_and_on_one(tmp_
         model = build_run(sc, resolve(sc, dx=0.004, end_time=10.0, energy_growth_ratio=0.0))
         solver = model.solver()
         assert portable.mismatch(model.config, model.particles, state) == ""
-        portable.put(solver, state["particles"] | {"x_build": state["particles"][lists_from]}, state["counters"])
+        portable.put(solver, state["particles"] | {"x_build": state["particles"][lists_from]}, state["counters"],
+                     state["bodies"])
         times = [solver.step() for _ in range(150)]
         slot = np.empty(solver.n, dtype=np.int64)
         slot[solver.ids.numpy()] = np.arange(solver.n)
@@ -220,11 +248,11 @@ def test_a_state_that_is_not_the_runs_is_refused_naming_what_differs():
     for _ in range(5):
         solver.step()
     rows = {k: a.numpy()[_slots(solver)].copy() for k, a in portable.particle_arrays(solver).items()}
-    state = {"format": portable.FORMAT, "particles": rows, "counters": portable.counters(solver)}
+    state = {"format": portable.FORMAT, "particles": rows, "counters": portable.counters(solver), "bodies": {}}
     assert portable.mismatch(model.config, model.particles, state) == ""
     first = [solver.step() for _ in range(10)]
     ahead = {k: getattr(solver, k).numpy()[_slots(solver)].copy() for k in ("pos", "vel", "rho")}
-    portable.put(solver, state["particles"], state["counters"])
+    portable.put(solver, state["particles"], state["counters"], state["bodies"])
     assert [solver.step() for _ in range(10)] == first
     for key, values in ahead.items():
         assert np.array_equal(getattr(solver, key).numpy()[_slots(solver)], values), key

@@ -62,8 +62,10 @@ contact turns nothing, and an edge meeting an edge (no corner inside) is not see
 The solver sets the bodies' poses at each stage of a step (the step's start, the half step, the
 candidate: ``body_poses``) and each body's particles on them (``move_walls``), with their velocity
 and acceleration, which the extrapolated-pressure wall's (g - a_w) term reads (boundaries/adami.py);
-the fluid sees the wall's velocity through the pair terms as it sees a fixed wall's zero. A scene
-without a moving body launches none of this and steps bit for bit as before.
+the fluid sees the wall's velocity through the pair terms as it sees a fixed wall's zero. What the
+bodies' particles add up to (a floating body's force and torque, the moving bodies' work on the
+fluid) is body_sums.py's. A scene without a moving body launches none of this and steps bit for
+bit as before.
 """
 import functools
 import math
@@ -73,7 +75,7 @@ from types import SimpleNamespace
 import numpy as np
 import warp as wp
 
-from . import health, sums
+from . import health
 from .state import BOUNDARY, DT, T
 
 FIXED, SINUSOID, MOVE, FLOATING, DRIVEN, TRANSLATE, SERIES = 0, 1, 2, 3, 4, 5, 6
@@ -727,31 +729,6 @@ def build(scalar):
         acc[i] = vec(scalar(a[0]), scalar(a[1]), scalar(a[2]))
 
     @wp.kernel(enable_backward=False, module="unique")
-    def wrench_sums(laws: wp.array(dtype=Law), poses: wp.array(dtype=Pose), ptype: wp.array(dtype=wp.int32),
-                    body: wp.array(dtype=wp.int32), pos: wp.array(dtype=vec), mass: wp.array(dtype=scalar),
-                    acc: wp.array(dtype=vec), part: wp.array2d(dtype=wp.vec3d), lead: int, step: int, members: int,
-                    chunk: int, stride: int):
-        """Each floating body's force and torque about its centre of mass from the fluid: sum m_i
-        acc_i and sum rho_i x m_i acc_i over its particles (the force pass's reactions), block k's
-        share into part[k, 2 b] and part[k, 2 b + 1] (sums.py: a fixed order of the terms)."""
-        k = wp.tid() * stride + chunk
-        n = ptype.shape[0]
-        for s in range(part.shape[1]):
-            part[k, s] = wp.vec3d(wp.float64(0.0))
-        for j in range(members):
-            i = sums.member(k, j, lead, step)
-            if i < n:
-                b = body[i]
-                if b >= 0 and ptype[i] == BOUNDARY:
-                    if laws[b].kind == FLOATING:
-                        a = acc[i]
-                        f = wp.vec3d(wp.float64(a[0]), wp.float64(a[1]), wp.float64(a[2])) * wp.float64(mass[i])
-                        x = pos[i]
-                        arm = wp.vec3d(wp.float64(x[0]), wp.float64(x[1]), wp.float64(x[2])) - poses[b].x
-                        part[k, 2 * b] = part[k, 2 * b] + f
-                        part[k, 2 * b + 1] = part[k, 2 * b + 1] + wp.cross(arm, f)
-
-    @wp.kernel(enable_backward=False, module="unique")
     def body_bounds(laws: wp.array(dtype=Law), candidate: wp.array(dtype=Rigid), lo: wp.vec3d, hi: wp.vec3d,
                     fail: wp.array(dtype=wp.int32)):
         """Flags body_outside with the lowest id of a floating body whose centre left the domain [lo,
@@ -771,25 +748,6 @@ def build(scalar):
         b = wp.tid()
         if healthy(fail):
             state[b] = candidate[b]
-
-    @wp.kernel(enable_backward=False, module="unique")
-    def work_on_fluid(laws: wp.array(dtype=Law), clock: wp.array(dtype=wp.float64), stride: int,
-                      ptype: wp.array(dtype=wp.int32), body: wp.array(dtype=wp.int32), mass: wp.array(dtype=scalar),
-                      acc: wp.array(dtype=vec), vel: wp.array(dtype=vec), part: wp.array2d(dtype=wp.float64),
-                      lead: int, step: int, members: int, chunk: int, launch_stride: int):
-        """Block k's share (part[k, 0], sums.py) of the work of one step (``stride`` steps dt:
-        multirate's coarse step) of the moving bodies on the fluid: stride dt sum_w -m_w a_w . v_w
-        over their particles, a_w the fluid's force on w over m_w and v_w their velocity at the
-        step's midpoint (the corrector's rates): the energy the fluid may gain (health.census_check)."""
-        k = wp.tid() * launch_stride + chunk
-        n = ptype.shape[0]
-        work = wp.float64(0.0)
-        for j in range(members):
-            i = sums.member(k, j, lead, step)
-            if i < n:
-                if moving(laws, ptype, body, i):
-                    work = work - wp.float64(mass[i] * wp.dot(acc[i], vel[i]))
-        part[k, 0] = wp.float64(stride) * clock[DT] * work
 
     def law_list(motions: list) -> list:
         """The Law of each of ``motions`` by body id (None: fixed), at least one."""
@@ -858,7 +816,7 @@ def build(scalar):
         return wp.array(table, dtype=Rigid, device=device)
 
     return SimpleNamespace(Law=Law, Rigid=Rigid, Pose=Pose, body_poses=body_poses, body_contacts=body_contacts,
-                           move_walls=move_walls, wrench_sums=wrench_sums, body_bounds=body_bounds,
-                           commit_rigid=commit_rigid, work_on_fluid=work_on_fluid,
+                           move_walls=move_walls, moving=moving, body_bounds=body_bounds,
+                           commit_rigid=commit_rigid,
                            law_list=law_list, segment=segment, external=external,
                            rigid_states=rigid_states)

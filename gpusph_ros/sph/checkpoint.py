@@ -82,8 +82,11 @@ def device_arrays(solver) -> dict:
 
 # not stored: the lists, which put() builds again from the last build's sort, positions, sorted
 # kinds and h and the lists' lengths (NeighbourList.relist), the sorted positions that build
-# gathers again, and the slot of each id, which each sort works out again from the ids
-NOT_STORED = ("neighbours.nbr", "neighbours._pos_sorted", "neighbours._slot_of")
+# gathers again, and the slot of each id, which each sort works out again from the ids; the floating
+# bodies' wrench table's rows, which the particles as built fix (body_sums.py), the live solver's
+# as a file's (an index read from a file would let a kernel write past the table)
+NOT_STORED = ("neighbours.nbr", "neighbours._pos_sorted", "neighbours._slot_of", "solver._wrench_rows",
+              "solver._row_body")
 
 
 def _width(state) -> "int | None":

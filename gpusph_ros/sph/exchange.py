@@ -21,9 +21,14 @@
   lists at the steps one rank would. So a rank's particles step bit for bit as one rank's
   (tests/test_ranks.py).
 
+- **Bodies.** Every rank holds every body's state and steps it alike. A moving body's particles are
+  placed from where they stood at t = 0, found by their run ids (``_by_id``). A floating body's
+  force and torque add every rank's owned particles' terms in the order of their run ids
+  (body_sums.py, Solver.each_total), so it moves on every rank, and on one, bit for bit.
+
 What this first form leaves out:
-- bodies, refinement zones and ``wall_flux: normal``, refused by name (``supported``): their state
-  is kept by particle id across the run;
+- refinement zones and ``wall_flux: normal``, refused by name (``supported``): their state is kept
+  by particle id across the run;
 - the energy check under repulsive walls (lennard_jones, monaghan_kajtar), whose walls' energy is
   summed over every pair a rank holds: energy_growth_ratio is 0 on ranks there.
 
@@ -75,8 +80,6 @@ def world():
 def supported(model) -> None:
     """ConfigError naming what a run on ranks cannot take yet (the module's docstring)."""
     cfg = model.config
-    if cfg.motions:
-        raise ConfigError("ranks", "bodies", "a scene without bodies on more than one rank (not built yet)")
     if cfg.zones:
         raise ConfigError("ranks", "refine", "a scene without refinement zones on more than one rank (not built yet)")
     if cfg.wall_flux != "full":
@@ -120,10 +123,16 @@ class RankedRun:
         self.capacity = int(np.ceil(ROOM * len(members))) + 8
         part = self._particles({k: v[members] for k, v in (records | {"spacing": spacing}).items()})
         self.gid = self._padded(members, -1)  # the run's id of each local id; -1: a vacant slot
+        # what the run's build fixes for each particle by its run id: a moving body's particle's place
+        # at t = 0 (bodies.move_walls) and its row in the floating bodies' wrench table (body_sums.py)
+        self._rest = p.pos
+        self._wrench_rows, row_body = Solver.wrench_table(cfg.motions, p)
         self.solver = Solver(cfg, part, owned=self._padded(owned, False),
-                             fluid=(float(p.mass[fluid].sum()), int(fluid.sum())))
+                             fluid=(float(p.mass[fluid].sum()), int(fluid.sum())),
+                             wrench_rows=(self._padded(self._wrench_rows[members], -1), row_body))
         self.solver.each_dt(self._all_maxima)
         self.solver.each_census(self._all_census)
+        self.solver.each_total(self._all_total)
         # a change of hands recuts the slabs where the fullest rank owns more than ``rebalance`` over
         # the mean, at most every ``rebalance_every`` steps (issue 69 item 3)
         self.rebalance, self.rebalance_every, self._recut_at = rebalance, rebalance_every, 0
@@ -135,8 +144,10 @@ class RankedRun:
         ghost = self.solver.ghost.numpy()
         self._ghost = np.zeros((len(p), 3), dtype=ghost.dtype)
         self._ghost[members] = ghost[:len(members)]
+        self._by_id(members)
         if state is not None:
-            portable.put(self.solver, {k: v[members] for k, v in state["particles"].items()}, state["counters"])
+            portable.put(self.solver, {k: v[members] for k, v in state["particles"].items()}, state["counters"],
+                         state["bodies"])
 
     # -- who holds what ----------------------------------------------------------------------
     def _members(self, pos: np.ndarray, gid: np.ndarray) -> tuple:
@@ -193,6 +204,15 @@ class RankedRun:
         totals.assign(e)
         counts.assign(c)
 
+    def _all_total(self, array):
+        """Every rank's ``array`` (Solver.each_total) added, in rank order on every rank: the same
+        float64 sum everywhere (a wrench table's row, one rank's term and zeros, exactly that term)."""
+        parts = self.comm.allgather(array.numpy().copy())
+        total = parts[0]
+        for part in parts[1:]:
+            total += part
+        array.assign(total)
+
     def _held(self, keys, owned_only: bool, near_ends: bool = False) -> dict:
         """This rank's particles (its owned ones only where ``owned_only``): ``keys`` of their state
         and their run ids. ``near_ends``: only those within ``depth`` + 1 cells of its slab's ends or
@@ -213,7 +233,7 @@ class RankedRun:
         local = {"gid": self.gid[ids[mine]]}
         arrays = portable.particle_arrays(s)  # each key's array, x_build's among them
         for k in keys:
-            local[k] = arrays[k].numpy()[mine]
+            local[k] = (arrays[k] if k in arrays else getattr(s, k)).numpy()[mine]
         return local
 
     def _gathered(self, local: dict) -> dict:
@@ -262,8 +282,8 @@ class RankedRun:
             s.step(t_target)
         except HealthError as err:
             # a particle's check names its local id, the run's id said instead; a census names the
-            # run's already (_all_census), an exclusion limit none
-            local = err.particle >= 0 and err.check != "clumping"
+            # run's already (_all_census), a body's check its body, an exclusion limit none
+            local = err.particle >= 0 and err.check not in ("clumping", "body_outside")
             failed = (err.check, err.step, err.time, int(self.gid[err.particle]) if local else err.particle,
                       err.detail)
         why = self.comm.allgather(failed)
@@ -321,7 +341,9 @@ class RankedRun:
 
     def _migrate(self):
         """Every rank takes the particles now in its slab and halo (the module's docstring)."""
-        keys = ("pos", "vel", "rho", "mass", "ptype", "body", "hsml")
+        # a moving wall's acceleration too: the extrapolated-pressure wall reads the last stage's
+        # (boundaries/adami.py) before the next step moves it
+        keys = ("pos", "vel", "rho", "mass", "ptype", "body", "hsml", "wall_acc")
         # what it holds (its halo refreshed after the last step) and what the others hold near their
         # ends: every particle that can be in its slab or halo now
         near = self._gathered(self._held(keys, owned_only=True, near_ends=True))
@@ -343,7 +365,7 @@ class RankedRun:
         if full:  # on every rank: one rank's error alone would leave the others waiting for it
             raise RuntimeError("; ".join(full))
         vacant = {"pos": np.zeros(3), "vel": np.zeros(3), "rho": 1.0, "mass": 0.0, "ptype": VACANT, "body": -1,
-                  "hsml": s.config.hdx * s.config.dx}
+                  "hsml": s.config.hdx * s.config.dx, "wall_acc": np.zeros(3)}
         for k, fill in vacant.items():
             a = getattr(s, k).numpy()
             a[:m] = fields[k]
@@ -356,7 +378,19 @@ class RankedRun:
         ghost[:m] = np.where((fields["ptype"] != 0)[:, None], self._ghost[members], 0.0)
         s.ghost.assign(ghost)
         self.gid = self._padded(members, -1)
+        self._by_id(members)
         s.neighbours.stale.fill_(1)
+
+    def _by_id(self, members: np.ndarray):
+        """What the run's build fixes for each of ``members`` (local id k the run's members[k]) into
+        the solver's tables by local id: a moving body's particle's place at t = 0, its wrench row."""
+        s = self.solver
+        if s._moving:
+            rest = np.zeros((self.capacity, 3))
+            rest[:len(members)] = self._rest[members]
+            s._rest.assign(rest)
+        if s._floating:
+            s._wrench_rows.assign(self._padded(self._wrench_rows[members], -1))
 
     def portable(self) -> "dict | None":
         """Rank 0: the run's state, whatever its cut (sph/portable.py), taken between two steps on
@@ -368,7 +402,8 @@ class RankedRun:
         every = {k: np.concatenate([q[k] for q, _ in parts]) for k in local}
         order = np.argsort(every.pop("gid"))
         return {"format": portable.FORMAT, "particles": {k: every[k][order] for k in portable.PARTICLE_KEYS},
-                "counters": portable.added_up([c for _, c in parts])}
+                "counters": portable.added_up([c for _, c in parts]),
+                "bodies": portable.body_arrays(self.solver)}  # every rank's bodies are rank 0's
 
     def rows(self, rows: np.ndarray) -> "np.ndarray | None":
         """Rank 0: of ``rows`` (one a local id, as measure/cloud.py packs them), those of every rank's

@@ -8,7 +8,10 @@ holds between two steps, whatever its cut, is:
   smoothing length, and where it stood when the lists were last built (``x_build``);
 - **the run's counters:** the clock, the step counts, the step loop's flags and the census (the
   same on every rank: ranks check the whole run's census, sph/exchange.py), and the exclusions
-  (each rank's added up, the first exclusion's time the earliest).
+  (each rank's added up, the first exclusion's time the earliest);
+- **the moving bodies' state** (the same on every rank): each body's law (a driven body's segment,
+  a floating body's external wrench), a floating body's state, every body's last pose and the
+  force and torque on it.
 
 A solver takes it up (``put``) with its particles in the order of their ids, and builds its lists
 from ``x_build``. Every neighbour sum adds its terms in the order of their cells then ids
@@ -22,7 +25,7 @@ run's own particles before anything changes, as checkpoint.mismatch does.
 import numpy as np
 import warp as wp
 
-from . import health
+from . import bodies, health
 from .checkpoint import SPEED_LIMIT
 from .state import DT, EXCLUDED, FAILED_STEP, FLUID, N_CLOCK, N_FLAGS, N_STEPS, T
 
@@ -31,6 +34,10 @@ PARTICLE_KEYS = ("pos", "vel", "rho", "mass", "ptype", "body", "hsml", "x_build"
 # the keys a run's own build fixes: a state of another run, or an edited one, is refused
 FIXED = ("mass", "body", "hsml")
 COUNTERS = ("_clock", "_steps", "_flags", "_excluded", "_excluded_mass", "_energy_sum")
+# the moving bodies' arrays (bodies.py): each body's law, floating state and pose (structs), and the
+# force and torque the last force pass found on each (two vectors a body), which the next step's
+# first pose reads
+BODIES = {"_laws": bodies.Law, "_rigid": bodies.Rigid, "_poses": bodies.Pose, "_body_sums": wp.vec3d}
 
 
 def is_portable(state) -> bool:
@@ -46,6 +53,12 @@ def counters(solver) -> dict:
     """The solver's counters (``COUNTERS``) as host copies."""
     wp.synchronize_device(solver.device)
     return {k: getattr(solver, k).numpy().copy() for k in COUNTERS}
+
+
+def body_arrays(solver) -> dict:
+    """The solver's moving bodies' arrays (``BODIES``) as host copies; none without a moving body."""
+    wp.synchronize_device(solver.device)
+    return {k: getattr(solver, k).numpy().copy() for k in BODIES} if solver._moving else {}
 
 
 def added_up(each: list) -> dict:
@@ -80,9 +93,12 @@ def mismatch(config, particles, state) -> str:
     """Why ``state`` is not a state of the run under ``config`` (sph.config) whose particles, as
     built, are ``particles`` (sph.particles.Particles); "" when it is. Read before any solver takes
     it up."""
-    if not is_portable(state) or set(state) != {"format", "particles", "counters"}:
+    if not is_portable(state) or set(state) != {"format", "particles", "counters", "bodies"}:
         return f"not a run's state of format {FORMAT!r}"
     rows, count = state["particles"], state["counters"]
+    problem = _bodies_mismatch(config, state["bodies"])
+    if problem:
+        return problem
     if not isinstance(rows, dict) or set(rows) != set(PARTICLE_KEYS):
         return f"its particles are not {', '.join(PARTICLE_KEYS)}"
     if not isinstance(count, dict) or set(count) != set(COUNTERS):
@@ -119,11 +135,38 @@ def mismatch(config, particles, state) -> str:
     return ""
 
 
-def put(solver, rows: dict, count: dict):
+def _bodies_mismatch(config, held) -> str:
+    """Why ``held`` is not the moving bodies' arrays of a run under ``config``, or ""."""
+    motions = config.motions or []
+    moving = any(m is not None for m in motions)
+    if not isinstance(held, dict) or set(held) != (set(BODIES) if moving else set()):
+        return f"its bodies are not {', '.join(BODIES) if moving else 'none'}"
+    for key, kind in BODIES.items():
+        a = held.get(key)
+        if a is None:
+            continue
+        if key == "_body_sums":
+            dtype, shape = np.dtype(np.float64), (2 * len(motions), 3)
+        else:
+            dtype, shape = np.dtype(kind.numpy_dtype()), (len(motions),)
+        if not isinstance(a, np.ndarray) or a.dtype != dtype or a.shape != shape:
+            return f"its bodies' {key} is not {shape} of the build's {dtype}"
+        values = [a[name] for name in dtype.names] if dtype.names else [a]
+        if any(v.dtype.kind == "f" and not np.isfinite(v).all() for v in values):
+            return f"its bodies' {key} holds a value that is not finite"
+    built = bodies.build(wp.float64).law_list(motions)
+    if moving and not (np.array_equal(held["_laws"]["kind"], [law.kind for law in built])
+                       and np.array_equal(held["_laws"]["centre"], [list(law.centre) for law in built])):
+        return "its bodies' laws are not the run's: a state of another run or scene"
+    return ""
+
+
+def put(solver, rows: dict, count: dict, body_arrays: dict):
     """``rows`` (``PARTICLE_KEYS`` of the solver's particles 0 .. len(rows) - 1, the rest left as they
-    are) and ``count`` (``COUNTERS``) into ``solver``, its particles first put back in the order of
-    their ids (a solver that has stepped has sorted them); its lists built from ``x_build``, as the
-    run's last build made them, and their staleness found on the positions now."""
+    are), ``count`` (``COUNTERS``) and ``body_arrays`` (``BODIES``) into ``solver``, its particles
+    first put back in the order of their ids (a solver that has stepped has sorted them); its lists
+    built from ``x_build``, as the run's last build made them, and their staleness found on the
+    positions now."""
     ids = solver.ids.numpy()
     if not np.array_equal(ids, np.arange(len(ids))):
         slot = np.empty(len(ids), dtype=np.int64)
@@ -140,6 +183,14 @@ def put(solver, rows: dict, count: dict):
     solver._needs_list.assign(needs)
     for key in COUNTERS:
         getattr(solver, key).assign(count[key])
+    for key, kind in BODIES.items():
+        if key in body_arrays:
+            getattr(solver, key).assign(wp.array(body_arrays[key], dtype=kind, device="cpu"))
+    if body_arrays:
+        solver._law_list = solver._laws.list()  # the host's copy, which drive() changes and copies whole
+        # the moving walls' acceleration where the run's next step puts it first (a fixed wall's zero)
+        solver.wall_acc.zero_()
+        solver._move_walls(0.0, solver.pos, solver.vel)
     nl = solver.neighbours
     nl.rebuild(wp.clone(nl.x_build), force=True)
     nl.stale.zero_()

@@ -16,6 +16,7 @@ import warp as wp
 
 from . import (
     bodies,
+    body_sums,
     boundaries,
     density,
     eos,
@@ -39,6 +40,7 @@ from .launch import Launcher
 from .neighbours import NeighbourList, NeighbourOverflow, default_max_neighbours, measured_width
 from .particles import Particles
 from .state import (
+    BOUNDARY,
     CENSUS_DUE,
     DT,
     DT_STABLE,
@@ -85,7 +87,8 @@ class Solver:
     """
 
     def __init__(self, config: SolverConfig, particles: Particles, max_neighbours: "int | None" = None,
-                 body_names: "list | None" = None, owned: "np.ndarray | None" = None, fluid: "tuple | None" = None):
+                 body_names: "list | None" = None, owned: "np.ndarray | None" = None, fluid: "tuple | None" = None,
+                 wrench_rows: "tuple | None" = None):
         self.config = config.replace(device=chosen_device(config.device)).validate()
         # each body's name by id, for what a report says of it (the scene's obstacles)
         self.body_names = list(body_names) if body_names else [f"body {k}" for k in range(len(config.motions))]
@@ -105,6 +108,9 @@ class Solver:
         # the fluid the health checks' shares are of: the whole run's (``fluid``: mass, particles) on a rank
         self._fluid_mass = float(particles.mass[particles.ptype == FLUID].sum()) if fluid is None else float(fluid[0])
         self.n_fluid = int((particles.ptype == FLUID).sum()) if fluid is None else int(fluid[1])
+        # the floating bodies' wrench table (body_sums.py): each particle's row by the caller's index
+        # and each row's body, the whole run's on a rank (``wrench_rows``)
+        self._wrench_table = self.wrench_table(config.motions, particles) if wrench_rows is None else wrench_rows
         spacing = particles.spacing if particles.spacing is not None else np.full(self.n, cfg.dx)
         if np.any(spacing <= 0.0) or np.any(spacing > cfg.dx * (1.0 + 1.0e-9)):
             raise ValueError(f"particles: spacings above 0 and at most dx = {cfg.dx:g} m (a refinement zone is "
@@ -135,6 +141,7 @@ class Solver:
         self._step_hooks = []
         self._dt_hooks = []
         self._census_hooks = []
+        self._total_hooks = []
         self._graph = graph.LoopGraph(self)
         self.time, self.dt, self.dt_stable, self.steps = 0.0, 0.0, 0.0, 0
         self._excluded_host = (np.zeros(health.N_REASONS, dtype=np.int32), np.array(health.EXCLUDED_START))
@@ -228,7 +235,12 @@ class Solver:
             self._rigid, self._rigid_h, self._rigid_c = (B.rigid_states(cfg.motions, dev) for _ in range(3))
             # force and torque of body b at 2 b and 2 b + 1, summed in a fixed order (sums.py)
             self._body_sums = wp.zeros(2 * nb, dtype=wp.vec3d, device=dev)
-            self._wrench_part = sums.Partials(n, 2 * nb, wp.vec3d, dev)
+            rows, row_body = self._wrench_table
+            self._wrench_rows = arr(rows, wp.int32)
+            self._row_body = wp.array(np.asarray(row_body, dtype=np.int32), dtype=wp.int32, device=dev)
+            self._wrench_terms = wp.zeros((max(1, len(row_body)), 2), dtype=wp.vec3d, device=dev)
+            self._wrench_part = sums.Partials(len(row_body), 2 * nb, wp.vec3d, dev)
+            self._step_work = wp.zeros(1, dtype=wp.float64, device=dev)
             self._gravity64 = wp.vec3d(*cfg.gravity)
             self._walls64 = (wp.vec3d(*cfg.wall_lo), wp.vec3d(*cfg.wall_hi))
             # the fixed obstacles' boxes a floating body meets (in float64, as its state), and whether
@@ -335,8 +347,11 @@ class Solver:
 
     def _put_in(self, order: wp.array):
         """Each particle's state moved to the slot ``order`` gives it: slot k takes particle order[k]."""
+        # a moving wall's acceleration too: left in its slot, a fixed wall particle sorted there read a
+        # paddle's (the extrapolated-pressure wall's g - a_w), where a fixed wall's is zero
         state = [self.pos, self.vel, self.rho, self.mass, self.hsml, self.ptype, self.body, self.ids,
-                 self._needs_list, self.ghost, self._spawned] + [self.wall_normal] * (self.config.wall_flux == "normal")
+                 self._needs_list, self.ghost, self._spawned, self.wall_acc] + \
+            [self.wall_normal] * (self.config.wall_flux == "normal")
         if self._owned is not None:
             state.append(self.fields.owned)
         for a in state:
@@ -417,11 +432,14 @@ class Solver:
         """The moving bodies' work on the fluid over the step (bodies.work_on_fluid), from the rates
         just evaluated at its midpoint over every level."""
         if self._moving:
-            part = self._sum64
-            self.launch(bodies.build(self.scalar).work_on_fluid, part.count,
-                        [self._laws, self._clock, self.params.coarse_stride, self.ptype, self.body, self.mass, self.acc,
-                         self._vel_h, *part.args()])
-            part.total(self._energy_sum, health.WORK, add=True)
+            part, S = self._sum64, body_sums.build(self.scalar)
+            self.launch(S.work_on_fluid, part.count,
+                        [self._laws, self._clock, self.params.coarse_stride, self.ptype, self.body, self.params.ranked,
+                         self.fields.owned, self.mass, self.acc, self._vel_h, *part.args()])
+            part.total(self._step_work)
+            for hook in self._total_hooks:
+                hook(self._step_work)
+            wp.launch(S.add_into, dim=1, inputs=[self._step_work, self._energy_sum, health.WORK], device=self.device)
 
     def _move_walls(self, factor: float, pos, vel, into: int = 0):
         """The moving bodies' poses at t + factor dt (bodies.body_poses: a floating body's state
@@ -449,9 +467,14 @@ class Solver:
     def _body_wrench(self, f):
         """Each floating body's force and torque from the fluid of the force pass just made on ``f``."""
         if self._floating:
-            part = self._wrench_part
-            self.launch(bodies.build(self.scalar).wrench_sums, part.count,
-                        [self._laws, self._poses, self.ptype, self.body, f.pos, self.mass, self.acc, *part.args()])
+            S, terms, part = body_sums.build(self.scalar), self._wrench_terms, self._wrench_part
+            terms.zero_()  # on a rank, the rows of the particles it does not own
+            wp.launch(S.wrench_terms, dim=self.n,
+                      inputs=[self._poses, self.ptype, self.body, self.ids, self._wrench_rows, self.params.ranked,
+                              self.fields.owned, f.pos, self.mass, self.acc, terms], device=self.device)
+            for hook in self._total_hooks:
+                hook(terms)
+            self.launch(S.wrench_sums, part.count, [self._row_body, terms, *part.args()])
             part.total(self._body_sums)
 
     def drive(self, body: int, t0: float, position, quaternion, velocity, omega, acceleration,
@@ -542,6 +565,26 @@ class Solver:
         rank checks every rank's (an all-reduce): the run fails or goes on as one. The hook reads
         the device, as each_dt's does."""
         self._census_hooks.append(hook)
+
+    def each_total(self, hook):
+        """Call ``hook(array)`` where a pass has summed over this solver's particles what must be the
+        whole run's before it is used (body_sums.py: the floating bodies' wrench table, a step's
+        work of the moving bodies): a rank adds every rank's there, on every rank in the same
+        order. The hook reads the device, as each_dt's does."""
+        self._total_hooks.append(hook)
+
+    @staticmethod
+    def wrench_table(motions, particles) -> tuple:
+        """(row of each particle in the floating bodies' wrench table, -1 for a particle of none; each
+        row's body): the floating bodies' wall particles in the order of ``particles``
+        (body_sums.py)."""
+        # one entry past the bodies: body -1 (no body) reads it
+        floating = np.array([isinstance(m, bodies.Floating) for m in motions or []] + [False], dtype=bool)
+        body = np.asarray(particles.body)
+        mine = (np.asarray(particles.ptype) == BOUNDARY) & floating[body]
+        rows = np.full(len(body), -1, dtype=np.int32)
+        rows[mine] = np.arange(int(mine.sum()), dtype=np.int32)
+        return rows, body[mine].astype(np.int32)
 
     @property
     def clock(self):
