@@ -578,10 +578,9 @@ class Solver:
         """(row of each particle in the floating bodies' wrench table, -1 for a particle of none; each
         row's body): the floating bodies' wall particles in the order of ``particles``
         (body_sums.py)."""
-        # one entry past the bodies: body -1 (no body) reads it
-        floating = np.array([isinstance(m, bodies.Floating) for m in motions or []] + [False], dtype=bool)
+        floating = [b for b, m in enumerate(motions or []) if isinstance(m, bodies.Floating)]
         body = np.asarray(particles.body)
-        mine = (np.asarray(particles.ptype) == BOUNDARY) & floating[body]
+        mine = (np.asarray(particles.ptype) == BOUNDARY) & np.isin(body, floating)
         rows = np.full(len(body), -1, dtype=np.int32)
         rows[mine] = np.arange(int(mine.sum()), dtype=np.int32)
         return rows, body[mine].astype(np.int32)
