@@ -445,29 +445,17 @@ class Run:
         """The fluid particles excluded at fault so far (sph.health): how many, their share of the
         fluid mass, by fault ('density_bounds 3, wall_penetration 1' or 'none'), the time of the
         first; and apart, those that left the tank over its walls and their share."""
-        s, across = self.solver, self.measurements.across  # on ranks, every rank's (measure/ranks.py)
-        counts = across.total(np.array([*s.excluded.values(), s.left_tank_particles], dtype=np.int64))
-        shares = across.total(np.array([s.excluded_fraction, s.left_tank_fraction]))
-        first = float(across.least(np.array([math.inf if s.first_excluded_time is None else s.first_excluded_time])
-                                   )[0])
-        return {"excluded_particles": int(counts[:-1].sum()), "excluded_fraction": float(shares[0]),
-                "excluded_by_reason": s.describe_excluded(counts[:-1]),
-                "first_excluded_time_s": None if first == math.inf else first, "left_tank_particles": int(counts[-1]),
-                "left_tank_fraction": float(shares[1])}
-
-    def health_peaks(self) -> dict:
-        """Solver.health_peaks. On ranks every rank's census is the whole run's (sph/exchange.py), but
-        for the energy under repulsive walls, which ranks do not measure."""
-        peaks = self.solver.health_peaks
-        if self.ranks is not None and self.ranks.energy_off:
-            peaks["peak_energy_growth"] = None
-        return peaks
+        s = self.solver  # on ranks, every rank's counts are the run's (sph/exchange.py)
+        return {"excluded_particles": s.excluded_particles, "excluded_fraction": s.excluded_fraction,
+                "excluded_by_reason": s.describe_excluded(list(s.excluded.values())),
+                "first_excluded_time_s": s.first_excluded_time, "left_tank_particles": s.left_tank_particles,
+                "left_tank_fraction": s.left_tank_fraction}
 
     def result(self, status: str) -> dict:
         """The result record a recording closes with."""
         return {"status": status, "wall_time_s": round(self.wall, 3), "steps": self.solver.steps,
                 "simulated_time_s": self.solver.time, "mipps": round(self.mipps(), 4), "outputs": self.next_output,
-                **self.exclusions(), **self.health_peaks()}
+                **self.exclusions(), **self.solver.health_peaks}
 
 
 CHECKPOINT_FILE = "checkpoint.npz"

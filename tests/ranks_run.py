@@ -1,6 +1,7 @@
 """Run under mpiexec by tests/test_ranks.py: a scene stepped on every rank (sph/exchange.py), its
-owned particles' state gathered to rank 0 and saved with each step's time and how often the slabs
-were cut again.
+owned particles' state gathered to rank 0 and saved with each step's time, how often the slabs
+were cut again, the run's health peaks and its last census's totals (Solver.health_peaks: every
+rank's are the run's).
 
     mpiexec -n N python -m mpi4py tests/ranks_run.py OUT.npz SCENE DX STEPS [KEY=VALUE ...]
         [--rebalance FRACTION] [--every STEPS] [--save-at STEP --state FILE | --resume FILE]
@@ -63,8 +64,9 @@ def main():
     cuts.append(run.slabs.cuts)
     state = run.gather()
     if state is not None:
+        peaks = {f"peak.{k}": np.nan if v is None else v for k, v in run.solver.health_peaks.items()}
         np.savez(args.out, times=np.array(times), recuts=run.recuts, first_cuts=np.array(cuts[0]),
-                 last_cuts=np.array(cuts[-1]), **state)
+                 last_cuts=np.array(cuts[-1]), census=run.solver._census_host, **state, **peaks)
 
 
 if __name__ == "__main__":

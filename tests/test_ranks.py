@@ -3,11 +3,12 @@
 Each case runs under ``mpiexec -n N python -m mpi4py tests/ranks_run.py``, the venv's MPICH. A rank
 that raises ends the whole job (mpi4py's runner), so a failure cannot hang the suite. Rank 0 saves
 the owned particles' positions, velocities and densities, in the solver's precision, with each
-step's time. The same scene steps as many times on one solver here (the energy check off, as on
-ranks). The comparison:
+step's time, and the run's health census. The same scene steps as many times on one solver here
+(its energy check off: a check that passes changes nothing). The comparison:
 - every particle is owned by exactly one rank (the ids are the run's, once each);
 - every step ends at the same time;
-- the state is equal bit for bit.
+- the state is equal bit for bit;
+- the census is the run's: its density extremes and clumped share equal, its energy to 1e-9.
 
 The cases:
 - the 2D collapse at 4 mm on 3 ranks with the slabs cut again mid-run;
@@ -16,6 +17,8 @@ The cases:
   last ranks meet across it);
 - a piston paddle and a floating box across the cuts, on the extrapolated-pressure wall (whose
   moving walls' acceleration changes hands with their particles);
+- the collapse on Lennard-Jones walls, whose wall energy the census adds (each pair counted once,
+  by its fluid particle's owner);
 - DamBreak 1 at 5 cm in 3D, recorded by gpusph-run (below: every cloud bit for bit).
 """
 import os
@@ -31,6 +34,7 @@ import yaml
 from gpusph_ros.scenes.build import build_run
 from gpusph_ros.scenes.schema import load_scene
 from gpusph_ros.scenes.settings import resolve
+from gpusph_ros.sph import health
 
 pytest.importorskip("mpi4py")
 pytestmark = pytest.mark.physics
@@ -70,7 +74,9 @@ def _one_rank(scene, dx: float, steps: int, sets: list) -> dict:
     times = [solver.step() for _ in range(steps)]
     slot = np.empty(solver.n, dtype=np.int64)
     slot[solver.ids.numpy()] = np.arange(solver.n)
-    return {"times": np.array(times), **{k: getattr(solver, k).numpy()[slot] for k in ("pos", "vel", "rho")}}
+    return {"times": np.array(times), **{k: getattr(solver, k).numpy()[slot] for k in ("pos", "vel", "rho")},
+            **{f"peak.{k}": np.nan if v is None else v for k, v in solver.health_peaks.items()},
+            "census": solver._census_host}
 
 
 def _on_ranks(ranks: int, scene, dx: float, steps: int, sets: list, out: Path, *options) -> dict:
@@ -87,6 +93,7 @@ def _on_ranks(ranks: int, scene, dx: float, steps: int, sets: list, out: Path, *
     ("collapse_2d", 0.004, 150, ["viscosity=sps"], (3,)),
     ("periodic", 0.005, 150, [], (3,)),
     ("bodies", 0.005, 150, ["boundary=adami"], (3,)),
+    ("collapse_2d", 0.004, 150, ["boundary=lennard_jones"], (2,)),
 ])
 def test_a_run_on_ranks_steps_bit_for_bit_as_on_one(scene, dx, steps, sets, ranks, tmp_path):
     name = scene
@@ -109,6 +116,14 @@ def test_a_run_on_ranks_steps_bit_for_bit_as_on_one(scene, dx, steps, sets, rank
         assert np.array_equal(many["times"], one["times"]), n
         for key in ("pos", "vel", "rho"):
             assert many[key].dtype == one[key].dtype and np.array_equal(many[key], one[key]), (n, key)
+        # the census is the run's on every rank: the density's extremes and the clumped share exact,
+        # the energy (the repulsive walls' among it, each pair counted by its fluid particle's owner)
+        # and its largest growth added in another order, so to round-off
+        for key in ("peak_clumped_fraction", "min_density_ratio", "max_density_ratio"):
+            assert many[f"peak.{key}"] == one[f"peak.{key}"], (n, key)
+        assert many["peak.peak_energy_growth"] == pytest.approx(one["peak.peak_energy_growth"], abs=1e-9), n
+        energy = (health.ENERGY, health.ENERGY_START, health.WORK)
+        assert many["census"][list(energy)] == pytest.approx(one["census"][list(energy)], rel=1e-9, abs=1e-12), n
 
 
 def test_slabs_cut_again_mid_run_keep_the_run_bit_for_bit(tmp_path):
@@ -307,20 +322,28 @@ def test_a_run_stopped_on_two_ranks_resumes_on_one_to_one_ranks_end(tmp_path, on
     assert a.header == b.header and bytes(a.data) == bytes(b.data)
 
 
-def test_a_check_on_the_whole_run_fails_every_rank_as_it_fails_one(tmp_path):
-    """The energy check on the census of every rank (sph/exchange.py, Solver.each_census): with a
-    slack of 2e-5 M g H, DamBreak 1 at 5 cm fails it at the same step, with the same message, on 2
-    ranks as on one, and both bags close whole with that status."""
+@pytest.mark.parametrize("limits, check", [
+    (["energy_growth_ratio=0.00002"], "energy_growth"),
+    (["rho_max_ratio=1.02", "max_excluded_fraction=0.01"], "excluded_fraction"),
+])
+def test_a_check_on_the_whole_run_fails_every_rank_as_it_fails_one(limits, check, tmp_path):
+    """The checks on the whole run's figures (sph/exchange.py): DamBreak 1 at 5 cm fails each at the
+    same step, with the same message, on 2 ranks as on one, and both bags close whole with that
+    status:
+    - the energy check on the census of every rank (Solver.each_census), with a slack of 2e-5 M g H;
+    - the excluded fraction on every rank's exclusions added up each step (Solver.each_total): with
+      the density bounded at 1.02 rho0 the impact excludes fluid from 0.19 s, and past 1% of its mass
+      (step 195) the run fails. When each rank checked its own share, rank 1 alone failed, later."""
     from gpusph_ros.analysis import bag
 
     status = []
     for ranks in (1, 2):
         out = tmp_path / f"bag{ranks}"
         done = subprocess.run(_gpusph_run_command(ranks, "dambreak1_lab", "--out", str(out), "--set=dx=0.05",
-                                                  "--set=end_time=0.3", "--set=energy_growth_ratio=0.00002"),
+                                                  "--set=end_time=0.3", *[f"--set={s}" for s in limits]),
                               capture_output=True, text=True, timeout=300, env={**os.environ, "OMP_NUM_THREADS": "1"})
         assert done.returncode == 2, done.stdout + done.stderr
         rec = bag.read(out)
         assert rec.complete
         status.append(rec.result["status"])
-    assert status[0] == status[1] and "health check 'energy_growth' failed at step" in status[0], status
+    assert status[0] == status[1] and f"health check '{check}' failed at step" in status[0], status

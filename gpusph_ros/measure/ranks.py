@@ -9,8 +9,7 @@ owners' state, and a measurement reads it there (``each_step``, ``view``). So:
 - **A sum over particles** (a body's wrench, a pressure block, a column) counts each rank's own
   particles (``owned``), and the ranks' sums are added (``total``, in float64). It is one rank's
   sum to round-off, its terms added in another order.
-- **A largest or smallest value** (a gauge's top particle, a density's extremes) is the largest or
-  smallest of the ranks' (``most``, ``least``): exact.
+- **A largest value** (a gauge's top particle) is the largest of the ranks' (``most``): exact.
 
 One rank (``Alone``) adds nothing, and its step loop stays on the device.
 """
@@ -45,9 +44,6 @@ class Alone:
     def most(self, values):
         return values
 
-    def least(self, values):
-        return values
-
 
 class Across(Alone):
     """The measurements of ``ranks`` (sph.exchange.RankedRun), this rank's part of one run."""
@@ -59,7 +55,7 @@ class Across(Alone):
 
         super().__init__(ranks.solver)
         self.ranks, self.comm = ranks, ranks.comm
-        self._ops = {"sum": MPI.SUM, "max": MPI.MAX, "min": MPI.MIN}
+        self._ops = {"sum": MPI.SUM, "max": MPI.MAX}
 
     def each_step(self, hook):
         """``hook()`` after every step, once the halo is the owners' state again."""
@@ -87,6 +83,3 @@ class Across(Alone):
 
     def most(self, values):
         return self._reduce(np.asarray(values), "max")
-
-    def least(self, values):
-        return self._reduce(np.asarray(values), "min")

@@ -26,15 +26,13 @@
   force and torque add every rank's owned particles' terms in the order of their run ids
   (body_sums.py, Solver.each_total), so it moves on every rank, and on one, bit for bit.
 
-What this first form leaves out:
-- refinement zones and ``wall_flux: normal``, refused by name (``supported``): their state is kept
-  by particle id across the run;
-- the energy check under repulsive walls (lennard_jones, monaghan_kajtar), whose walls' energy is
-  summed over every pair a rank holds: energy_growth_ratio is 0 on ranks there.
+What this first form leaves out: refinement zones and ``wall_flux: normal``, refused by name
+(``supported``): their state is kept by particle id across the run.
 
-The census (the energy, the density's extremes, the clumped particles) is every rank's, gathered
-and added in rank order on every rank before its check (Solver.each_census): the energy check and
-the clumping check decide alike everywhere, on the whole run's figures.
+The census (the energy, the repulsive walls' among it, the density's extremes, the clumped
+particles) is every rank's, gathered and added in rank order on every rank before its check
+(Solver.each_census), and so is each step's exclusions before their limits are checked
+(Solver.each_total): every rank holds the run's figures and decides alike.
 
 Each rank sends every other rank the owned particles within ``depth`` + 1 cells of its slab's ends
 (an all-gather): the neighbours alone need them, and a point-to-point exchange with each neighbour
@@ -46,7 +44,6 @@ import time
 import numpy as np
 
 from . import health, portable
-from .boundaries import model as boundary_model
 from .config import ConfigError
 from .decomposition import HALO_CELLS, SPS_HALO_CELLS, split
 from .health import HealthError
@@ -96,10 +93,6 @@ class RankedRun:
         supported(model)
         self.comm, self._max, self._sum = comm, MPI.MAX, MPI.SUM
         cfg = model.config
-        # the repulsive walls' potential energy is summed over every pair a rank holds, its halo's too
-        self.energy_off = boundary_model(cfg.boundary).repulsive
-        if self.energy_off:
-            cfg = cfg.replace(energy_growth_ratio=0.0)
         p = model.particles
         spacing = p.spacing if p.spacing is not None else np.full(len(p), cfg.dx)
         tank = [*model.scene.tank, 0.0, 0.0][:3]  # a 2D tank's third axis is none to cut along
@@ -401,9 +394,10 @@ class RankedRun:
             return None
         every = {k: np.concatenate([q[k] for q, _ in parts]) for k in local}
         order = np.argsort(every.pop("gid"))
+        # every rank's counters and bodies are the run's (the census and the exclusions added up each
+        # step, the bodies stepped alike): rank 0's
         return {"format": portable.FORMAT, "particles": {k: every[k][order] for k in portable.PARTICLE_KEYS},
-                "counters": portable.added_up([c for _, c in parts]),
-                "bodies": portable.body_arrays(self.solver)}  # every rank's bodies are rank 0's
+                "counters": parts[0][1], "bodies": portable.body_arrays(self.solver)}
 
     def rows(self, rows: np.ndarray) -> "np.ndarray | None":
         """Rank 0: of ``rows`` (one a local id, as measure/cloud.py packs them), those of every rank's

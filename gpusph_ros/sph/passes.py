@@ -303,18 +303,20 @@ def _force_passes(scalar):
     @wp.kernel(enable_backward=False, module="unique")
     def wall_energy(p: Params, grid: Grid, nb: Walk,
                     pos: wp.array(dtype=vec), mass: wp.array(dtype=scalar), ptype: wp.array(dtype=wp.int32),
+                    owned: wp.array(dtype=wp.int32),
                     part: wp.array2d(dtype=wp.float64), lead: int, step: int, members: int, chunk: int, stride: int):
         """Block k's share (part[k, 0], sums.py) of the energy the repulsive walls (Lennard-Jones,
         Monaghan-Kajtar) hold, which the census adds to the fluid's, so that it sums what a
         conservative wall conserves: a fluid particle pressed against such a wall gives that energy
-        back as motion."""
+        back as motion. Each pair counted from its fluid particle, on a rank only its owned ones':
+        the ranks' sums add up to the run's (sph/exchange.py)."""
         k = wp.tid() * stride + chunk
         n = ptype.shape[0]
         held = wp.float64(0.0)
         for q in range(members):
             i = sums.member(k, q, lead, step)
             if i < n:
-                if ptype[i] == FLUID:
+                if ptype[i] == FLUID and (p.ranked == 0 or owned[i] != 0):
                     e = scalar(0.0)
                     cell_i, reach_i = walk_from(grid, nb, i)
                     for w in range(walk_cells(reach_i)):

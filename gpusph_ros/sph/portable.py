@@ -6,9 +6,9 @@ which one solver of the same particles takes up again. A run on ranks has no one
 holds between two steps, whatever its cut, is:
 - **each particle's state, by its id in the run:** position, velocity, density, mass, kind, body,
   smoothing length, and where it stood when the lists were last built (``x_build``);
-- **the run's counters:** the clock, the step counts, the step loop's flags and the census (the
-  same on every rank: ranks check the whole run's census, sph/exchange.py), and the exclusions
-  (each rank's added up, the first exclusion's time the earliest);
+- **the run's counters:** the clock, the step counts, the step loop's flags, the census and the
+  exclusions (the same on every rank: the ranks add up each census and each step's exclusions
+  before they check them, sph/exchange.py);
 - **the moving bodies' state** (the same on every rank): each body's law (a driven body's segment,
   a floating body's external wrench), a floating body's state, every body's last pose and the
   force and torque on it.
@@ -59,21 +59,6 @@ def body_arrays(solver) -> dict:
     """The solver's moving bodies' arrays (``BODIES``) as host copies; none without a moving body."""
     wp.synchronize_device(solver.device)
     return {k: getattr(solver, k).numpy().copy() for k in BODIES} if solver._moving else {}
-
-
-def added_up(each: list) -> dict:
-    """The run's counters from every rank's (``counters``; the clock, steps, flags and census are the
-    same on all)."""
-    out = {k: each[0][k].copy() for k in ("_clock", "_steps", "_flags", "_energy_sum")}
-    out["_excluded"] = np.sum([c["_excluded"] for c in each], axis=0).astype(each[0]["_excluded"].dtype)
-    mass = np.array(health.EXCLUDED_START, dtype=np.float64)
-    for slot in (health.MASS, health.LEFT_MASS):
-        mass[slot] = sum(float(c["_excluded_mass"][slot]) for c in each)
-    first = [float(c["_excluded_mass"][health.FIRST_TIME]) for c in each
-             if c["_excluded_mass"][health.FIRST_TIME] >= 0.0]
-    mass[health.FIRST_TIME] = min(first, default=-1.0)
-    out["_excluded_mass"] = mass
-    return out
 
 
 def _layouts(config, n: int) -> tuple:

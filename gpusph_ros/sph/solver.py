@@ -417,6 +417,9 @@ class Solver:
                           self._pending,
                           self._pending_units], device=dev)
         wp.capture_if(self.flag(CENSUS_DUE), on_true=self._census)
+        for hook in self._total_hooks:  # the run's exclusions this step, which its limits are checked on
+            hook(self._pending)
+            hook(self._pending_units)
         wp.launch(k.exclusion_check, dim=1, inputs=[p, self._clock, self._pending, self._pending_units,
                                                     self._excluded, self._excluded_mass, self._fail], device=dev)
         wp.launch(k.commit, dim=n, inputs=[self._fail, self._faulty, self._pos_c, self._vel_c, self._rho_c, self.pos,
@@ -537,7 +540,7 @@ class Solver:
         if self.boundary.repulsive and self.n > self.n_fluid:
             nl = self.neighbours
             self.launch(k.wall_energy, part.count, [p, nl.grid, nl.walk, self._pos_c, self.mass, self.ptype,
-                                                    *part.args()])
+                                                    self.fields.owned, *part.args()])
             part.total(self._energy_sum, health.ENERGY, add=True)
         for hook in self._census_hooks:
             hook(self._energy_sum, self._clump_count)
@@ -569,8 +572,9 @@ class Solver:
     def each_total(self, hook):
         """Call ``hook(array)`` where a pass has summed over this solver's particles what must be the
         whole run's before it is used (body_sums.py: the floating bodies' wrench table, a step's
-        work of the moving bodies): a rank adds every rank's there, on every rank in the same
-        order. The hook reads the device, as each_dt's does."""
+        work of the moving bodies; a step's exclusions, health.exclusion_check): a rank adds every
+        rank's there, on every rank in the same order, so that every rank holds the run's totals
+        and decides alike. The hook reads the device, as each_dt's does."""
         self._total_hooks.append(hook)
 
     @staticmethod
