@@ -47,7 +47,7 @@ from . import health, portable
 from .config import ConfigError
 from .decomposition import HALO_CELLS, SPS_HALO_CELLS, split
 from .health import HealthError
-from .neighbours import list_skin
+from .neighbours import NeighbourOverflow, default_max_neighbours, list_skin
 from .particles import Particles
 from .solver import Solver
 from .state import REORDER_DUE, VACANT
@@ -120,8 +120,11 @@ class RankedRun:
         # at t = 0 (bodies.move_walls) and its row in the floating bodies' wrench table (body_sums.py)
         self._rest = p.pos
         self._wrench_rows, row_body = Solver.wrench_table(cfg.motions, p)
-        self.solver = Solver(cfg, part, owned=self._padded(owned, False),
-                             fluid=(float(p.mass[fluid].sum()), int(fluid.sum())),
+        # lists as wide as the lattice's estimate from the start (what the plan prices): one solver
+        # widens its lists and takes the step again when one outgrows them, which a rank alone may
+        # not do, its collectives then no longer matching the others'
+        self.solver = Solver(cfg, part, max_neighbours=default_max_neighbours(cfg.dim, cfg.hdx),
+                             owned=self._padded(owned, False), fluid=(float(p.mass[fluid].sum()), int(fluid.sum())),
                              wrench_rows=(self._padded(self._wrench_rows[members], -1), row_body))
         self.solver.each_dt(self._all_maxima)
         self.solver.each_census(self._all_census)
@@ -279,11 +282,15 @@ class RankedRun:
             local = err.particle >= 0 and err.check not in ("clumping", "body_outside")
             failed = (err.check, err.step, err.time, int(self.gid[err.particle]) if local else err.particle,
                       err.detail)
+        except NeighbourOverflow as err:
+            failed = (None, 0, 0.0, 0, str(err))
         why = self.comm.allgather(failed)
         ranks = [r for r, w in enumerate(why) if w]
         if ranks:  # every rank raises the first failing rank's failure, and says which ranks found one
             check, step, t, particle, detail = why[ranks[0]]
             where = "" if len(ranks) == len(why) else f" (found on rank {', '.join(map(str, ranks))})"
+            if check is None:
+                raise NeighbourOverflow(detail + where)
             raise HealthError(check, step, t, particle, detail + where)
         start = time.perf_counter()
         self._refresh()
