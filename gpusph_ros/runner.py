@@ -249,7 +249,7 @@ class Run:
             problem = portable.mismatch(self.model.config, self.model.particles, state["solver"])
             t = None if problem else float(state["solver"]["counters"]["_clock"][T])
         elif self.ranks is not None:
-            problem = "taken by one solver, it goes on on one solver only (docs/ranks.md)"
+            problem = "one solver's state, which a run on ranks takes up as it starts only (gpusph-run --resume)"
         else:
             problem = checkpoint.mismatch(self.solver, state["solver"])
             t = None if problem else state["solver"]["host"]["solver"]["time"]
@@ -537,7 +537,9 @@ def resume(folder, comm=None):
             raise ValueError(f"its settings build up to {at_most:,} particles and its state holds {shown(held)}: "
                              "they are not the settings it was taken with")
         ranked = comm is not None and comm.size > 1
-        run = Run(scene, config, comm=comm, state=taken if ranked and portable.is_portable(taken) else None)
+        if ranked and not portable.is_portable(taken):  # one solver's: its particles by id, any cut takes
+            taken = state["run"]["solver"] = portable.of_solver_state(taken)
+        run = Run(scene, config, comm=comm, state=taken if ranked else None)
         run.restore(state["run"])
         counted_file, counted = recording["file"], recording["messages"]
         if not isinstance(counted_file, str) or type(counted) is not int or counted < 1:

@@ -288,18 +288,21 @@ def test_a_state_that_is_not_the_runs_is_refused_naming_what_differs():
     assert "not a run's state" in portable.mismatch(model.config, model.particles, {"format": "x"})
 
 
-def test_a_run_stopped_on_two_ranks_resumes_on_one_to_one_ranks_end(tmp_path, one_rank_runs):
-    """DamBreak 1 at 5 cm under ``mpiexec -n 2 gpusph-run``, stopped by Ctrl-C (SIGINT to mpiexec,
-    which sends it to every rank): every rank stops at the same step, the bag is whole, and rank 0
-    writes the run's state (sph/portable.py). ``gpusph-run --resume`` on one rank goes on from it,
-    and its last cloud is the uninterrupted run's, bit for bit (3 ranks to 2 and to 1: the test
-    above)."""
+@pytest.mark.parametrize("stopped, resumed", [(2, 1), (1, 2)])
+def test_a_run_stopped_on_some_ranks_resumes_on_others_to_one_ranks_end(stopped, resumed, tmp_path, one_rank_runs):
+    """DamBreak 1 at 5 cm under ``gpusph-run``, stopped by Ctrl-C (under ``mpiexec -n 2``, SIGINT to
+    mpiexec, which sends it to every rank: every rank stops at the same step), the bag whole and the
+    run's state written (on ranks by rank 0, sph/portable.py). ``gpusph-run --resume`` on the other
+    count of ranks goes on from it (one solver's state taken up by ranks through
+    portable.of_solver_state), and its last cloud is the uninterrupted run's, bit for bit (3 ranks to
+    2 and to 1: the test above)."""
     from gpusph_ros.analysis import bag
 
     sets = ["dx=0.05", "end_time=0.3"]
-    out = tmp_path / "three"
-    job = subprocess.Popen(_gpusph_run_command(2, "dambreak1_lab", "--out", str(out), *[f"--set={s}" for s in sets],
-                                               quiet=False), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    out = tmp_path / "stopped"
+    job = subprocess.Popen(_gpusph_run_command(stopped, "dambreak1_lab", "--out", str(out),
+                                               *[f"--set={s}" for s in sets], quiet=False),
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                            env={**os.environ, "OMP_NUM_THREADS": "1"})
     said = ""
     while "t = 0.1" not in said:  # a progress line at t = 0.1x s (every 2 outputs in a log): then Ctrl-C
@@ -310,15 +313,15 @@ def test_a_run_stopped_on_two_ranks_resumes_on_one_to_one_ranks_end(tmp_path, on
     rest, why = job.communicate(timeout=60)
     said += rest
     assert job.returncode == 2 and "interrupted" in said and (out / "checkpoint.npz").is_file(), said + why
-    stopped = bag.read(out)
-    assert stopped.complete and stopped.result["status"] == "interrupted"
-    assert 0.0 < float(stopped.result["simulated_time_s"]) < 0.3
-    done = subprocess.run(_gpusph_run_command(1, "--resume", str(out)), capture_output=True, text=True, timeout=300,
-                          env={**os.environ, "OMP_NUM_THREADS": "1"})
+    halted = bag.read(out)
+    assert halted.complete and halted.result["status"] == "interrupted"
+    assert 0.0 < float(halted.result["simulated_time_s"]) < 0.3
+    done = subprocess.run(_gpusph_run_command(resumed, "--resume", str(out)), capture_output=True, text=True,
+                          timeout=300, env={**os.environ, "OMP_NUM_THREADS": "1"})
     assert done.returncode == 0 and "resumed at t = 0.1" in done.stdout, done.stdout + done.stderr
-    one, resumed = bag.read(one_rank_runs("dambreak1_lab", sets)), bag.read(out)
-    assert resumed.complete and one.clock == resumed.clock
-    a, b = one.cloud(len(one.clouds) - 1), resumed.cloud(len(resumed.clouds) - 1)
+    one, went_on = bag.read(one_rank_runs("dambreak1_lab", sets)), bag.read(out)
+    assert went_on.complete and one.clock == went_on.clock
+    a, b = one.cloud(len(one.clouds) - 1), went_on.cloud(len(went_on.clouds) - 1)
     assert a.header == b.header and bytes(a.data) == bytes(b.data)
 
 

@@ -55,6 +55,25 @@ def counters(solver) -> dict:
     return {k: getattr(solver, k).numpy().copy() for k in COUNTERS}
 
 
+def of_solver_state(state) -> dict:
+    """The run's state in this format from one solver's (checkpoint.capture: its arrays by slot, the
+    ids saying whose each slot is), for a run on ranks to take up; ValueError where it does not
+    hold a solver's arrays. What it holds is then checked as any state is (``mismatch``)."""
+    try:
+        arrays = state["arrays"]
+        ids = np.asarray(arrays["solver.ids"])
+        if ids.ndim != 1 or not np.array_equal(np.sort(ids), np.arange(len(ids))):
+            raise ValueError("its solver.ids is not an order of its particles")
+        order = np.argsort(ids)
+        particles = {k: np.asarray(arrays["neighbours._x_build" if k == "x_build" else f"solver.{k}"])[order]
+                     for k in PARTICLE_KEYS}
+        counters = {k: np.asarray(arrays[f"solver.{k}"]) for k in COUNTERS}
+        body = {k: np.asarray(arrays[f"solver.{k}"]) for k in BODIES if f"solver.{k}" in arrays}
+    except (KeyError, TypeError, IndexError) as err:
+        raise ValueError(f"not one solver's state ({type(err).__name__}: {err})") from None
+    return {"format": FORMAT, "particles": particles, "counters": counters, "bodies": body}
+
+
 def body_arrays(solver) -> dict:
     """The solver's moving bodies' arrays (``BODIES``) as host copies; none without a moving body."""
     wp.synchronize_device(solver.device)
