@@ -12,7 +12,8 @@ step's time, and the run's health census. The same scene steps as many times on 
 
 The cases:
 - the 2D collapse at 4 mm on 3 ranks with the slabs cut again mid-run;
-- the collapse under mDBC with shifting, and under SPS (its halo a cell deeper);
+- the collapse under mDBC with shifting and the walls' normal flux, and under SPS (its halo a cell
+  deeper);
 - a collapse in a tank periodic along the cut axis (the water crosses the period and the first and
   last ranks meet across it);
 - a piston paddle and a floating box across the cuts, on the extrapolated-pressure wall (whose
@@ -89,7 +90,7 @@ def _on_ranks(ranks: int, scene, dx: float, steps: int, sets: list, out: Path, *
 
 
 @pytest.mark.parametrize("scene, dx, steps, sets, ranks", [
-    ("collapse_2d", 0.004, 150, ["boundary=mdbc", "shifting=true"], (2,)),
+    ("collapse_2d", 0.004, 150, ["boundary=mdbc", "shifting=true", "wall_flux=normal"], (2,)),
     ("collapse_2d", 0.004, 150, ["viscosity=sps"], (3,)),
     ("periodic", 0.005, 150, [], (3,)),
     ("bodies", 0.005, 150, ["boundary=adami"], (3,)),

@@ -26,8 +26,9 @@
   force and torque add every rank's owned particles' terms in the order of their run ids
   (body_sums.py, Solver.each_total), so it moves on every rank, and on one, bit for bit.
 
-What this first form leaves out: refinement zones and ``wall_flux: normal``, refused by name
-(``supported``): their state is kept by particle id across the run.
+What this first form leaves out: refinement zones, refused by name (``supported``): a zone turns
+particles passive and spawns finer ones into slots it reserves, which the change of hands does not
+carry yet.
 
 The census (the energy, the repulsive walls' among it, the density's extremes, the clumped
 particles) is every rank's, gathered and added in rank order on every rank before its check
@@ -76,11 +77,8 @@ def world():
 
 def supported(model) -> None:
     """ConfigError naming what a run on ranks cannot take yet (the module's docstring)."""
-    cfg = model.config
-    if cfg.zones:
+    if model.config.zones:
         raise ConfigError("ranks", "refine", "a scene without refinement zones on more than one rank (not built yet)")
-    if cfg.wall_flux != "full":
-        raise ConfigError("wall_flux", cfg.wall_flux, "full on more than one rank (not built yet)")
 
 
 class RankedRun:
@@ -98,10 +96,9 @@ class RankedRun:
         tank = [*model.scene.tank, 0.0, 0.0][:3]  # a 2D tank's third axis is none to cut along
         # a run going on from ``state`` (``portable()``, checked by portable.mismatch) is cut where its
         # particles stood at the lists' last build, and each rank takes what that build's change of
-        # hands gave it
+        # hands gave it: built as the run was at its start (what the build fixes for each particle,
+        # its walls' geometry, found where one solver found it), then put in the state
         records = {"pos": p.pos, "vel": p.vel, "rho": p.rho, "mass": p.mass, "ptype": p.ptype, "body": p.body}
-        if state is not None:
-            records = {k: state["particles"][k] for k in records}
         at = p.pos if state is None else state["particles"]["x_build"]
         self.slabs = split(at, (0.0, 0.0, 0.0), tank, cfg.periodic, list_skin() * 2.0 * cfg.h, comm.size)
         self.depth = SPS_HALO_CELLS if cfg.viscosity == "sps" else HALO_CELLS
@@ -135,11 +132,15 @@ class RankedRun:
         self.recuts = 0
         self._hooks = []  # each_step's
         self.exchange_s = 0.0  # wall time in the exchange (hands changed, the halo refreshed), for bench/ranks.py
-        # mDBC's ghost-node offsets by run id, each a wall particle's own geometry (boundaries/faces.py),
-        # found once: a wall particle's stays its own as the slots are rewritten
-        ghost = self.solver.ghost.numpy()
-        self._ghost = np.zeros((len(p), 3), dtype=ghost.dtype)
-        self._ghost[members] = ghost[:len(members)]
+        # mDBC's ghost-node offsets and the walls' face normals (wall_flux: normal) by run id, each a
+        # wall particle's own geometry (boundaries/faces.py), found once at the start: a wall
+        # particle's stays its own as the slots are rewritten
+        self._geometry = {}
+        for key in ("ghost", "wall_normal"):
+            found = getattr(self.solver, key).numpy()
+            if len(found) == self.capacity:  # wall_normal is one entry under wall_flux: full
+                self._geometry[key] = np.zeros((len(p), 3), dtype=found.dtype)
+                self._geometry[key][members] = found[:len(members)]
         self._by_id(members)
         if state is not None:
             portable.put(self.solver, {k: v[members] for k, v in state["particles"].items()}, state["counters"],
@@ -374,9 +375,10 @@ class RankedRun:
         s.ids.assign(np.arange(self.capacity, dtype=np.int32))
         s.fields.owned.assign(self._padded(owned.astype(np.int32), 0))
         s._needs_list.assign(self._padded(s.needs_list(fields["ptype"], fields["body"]), 0))
-        ghost = np.zeros((self.capacity, 3), dtype=self._ghost.dtype)
-        ghost[:m] = np.where((fields["ptype"] != 0)[:, None], self._ghost[members], 0.0)
-        s.ghost.assign(ghost)
+        for key, table in self._geometry.items():
+            values = np.zeros((self.capacity, 3), dtype=table.dtype)
+            values[:m] = np.where((fields["ptype"] != 0)[:, None], table[members], 0.0)
+            getattr(s, key).assign(values)
         self.gid = self._padded(members, -1)
         self._by_id(members)
         s.neighbours.stale.fill_(1)
