@@ -26,6 +26,7 @@ import os
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -324,6 +325,46 @@ def test_a_run_stopped_on_some_ranks_resumes_on_others_to_one_ranks_end(stopped,
     assert went_on.complete and one.clock == went_on.clock
     a, b = one.cloud(len(one.clouds) - 1), went_on.cloud(len(went_on.clouds) - 1)
     assert a.header == b.header and bytes(a.data) == bytes(b.data)
+
+
+def _rank_processes(command: str) -> dict:
+    """{rank: pid} of the running processes whose command line holds ``command``, started by mpiexec
+    (their environment's PMI_RANK)."""
+    found = {}
+    for proc in Path("/proc").iterdir():
+        try:
+            env = dict(e.split(b"=", 1) for e in (proc / "environ").read_bytes().split(b"\0") if b"=" in e)
+            cmdline = (proc / "cmdline").read_bytes()
+        except (OSError, ValueError):
+            continue
+        if b"PMI_RANK" in env and command.encode() in cmdline:
+            found[int(env[b"PMI_RANK"])] = int(proc.name)
+    return found
+
+
+@pytest.mark.skipif(not Path("/proc/self/environ").exists(), reason="reads the ranks' environments from /proc")
+def test_a_rank_that_dies_ends_the_whole_job_at_once_with_a_message(tmp_path):
+    """Rank 1 of ``mpiexec -n 2 gpusph-run`` killed (SIGKILL, no chance to say anything) once the
+    run records: mpiexec ends the job within seconds (measured: at once) and says which process died
+    and how; no rank is left running, none waits in a collective for the dead one."""
+    out = tmp_path / "killed"
+    job = subprocess.Popen(_gpusph_run_command(2, "dambreak1_lab", "--out", str(out), "--set=dx=0.05",
+                                               "--set=end_time=5.0"), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           text=True, env={**os.environ, "OMP_NUM_THREADS": "1"})
+    try:
+        deadline = time.monotonic() + 120
+        while not (list(out.glob("*.mcap")) and len(_rank_processes(str(out))) == 2):
+            assert job.poll() is None and time.monotonic() < deadline, job.communicate()
+            time.sleep(0.2)
+        ranks = _rank_processes(str(out))
+        killed = time.monotonic()
+        os.kill(ranks[1], signal.SIGKILL)
+        said, _ = job.communicate(timeout=30)
+    finally:
+        job.kill()
+    assert time.monotonic() - killed < 10 and job.returncode != 0
+    assert "BAD TERMINATION" in said and "signal 9" in said, said[-2000:]
+    assert _rank_processes(str(out)) == {}
 
 
 @pytest.mark.parametrize("limits, check", [
