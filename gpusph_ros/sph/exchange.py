@@ -258,21 +258,21 @@ class RankedRun:
     def view(self):
         """Solver.measurement_view on every rank together: where any rank's lists are stale, the
         particles change hands first, as the next step would have them do."""
-        s = self.solver
-        if self.comm.allreduce(int(s.neighbours.stale.numpy()[0]), op=self._max):
+        self._change_hands()
+        return self.solver.measurement_view()
+
+    def _change_hands(self, due: bool = False):
+        """Where any rank's lists are stale, or where ``due``, the slabs cut again if they have
+        drifted (``_balance``) and the particles change hands (``_migrate``), on every rank alike."""
+        if self.comm.allreduce(int(self.solver.neighbours.stale.numpy()[0]), op=self._max) or due:
             self._balance()
             self._migrate()
-        return s.measurement_view()
 
     def step(self, t_target: float = float("inf")) -> float:
         s = self.solver
         start = time.perf_counter()
-        stale = self.comm.allreduce(int(s.neighbours.stale.numpy()[0]), op=self._max)
-        if stale or int(s.flag(REORDER_DUE).numpy()[0]):
-            self._balance()
-            self._migrate()
-            if stale:
-                s.neighbours.stale.fill_(1)
+        # a reorder is due at the same step on every rank (the step counts are the run's)
+        self._change_hands(due=bool(s.flag(REORDER_DUE).numpy()[0]))
         self.exchange_s += time.perf_counter() - start
         failed = None
         try:
