@@ -141,7 +141,6 @@ class RankedRun:
             if len(found) == self.capacity:  # wall_normal is one entry under wall_flux: full
                 self._geometry[key] = np.zeros((len(p), 3), dtype=found.dtype)
                 self._geometry[key][members] = found[:len(members)]
-        self._by_id(members)
         if state is not None:
             portable.put(self.solver, {k: v[members] for k, v in state["particles"].items()}, state["counters"],
                          state["bodies"])
@@ -385,7 +384,9 @@ class RankedRun:
 
     def _by_id(self, members: np.ndarray):
         """What the run's build fixes for each of ``members`` (local id k the run's members[k]) into
-        the solver's tables by local id: a moving body's particle's place at t = 0, its wrench row."""
+        the solver's tables by local id: a moving body's particle's place at t = 0, its wrench row.
+        At each change of hands: the solver, built from its first members as the run started,
+        holds theirs already."""
         s = self.solver
         if s._moving:
             rest = np.zeros((self.capacity, 3))
@@ -397,16 +398,15 @@ class RankedRun:
     def portable(self) -> "dict | None":
         """Rank 0: the run's state, whatever its cut (sph/portable.py), taken between two steps on
         every rank together; None elsewhere."""
-        local = self._held(portable.PARTICLE_KEYS, owned_only=True)
-        parts = self.comm.gather((local, portable.counters(self.solver)), root=0)
+        parts = self.comm.gather(self._held(portable.PARTICLE_KEYS, owned_only=True), root=0)
         if parts is None:
             return None
-        every = {k: np.concatenate([q[k] for q, _ in parts]) for k in local}
+        every = {k: np.concatenate([q[k] for q in parts]) for k in parts[0]}
         order = np.argsort(every.pop("gid"))
         # every rank's counters and bodies are the run's (the census and the exclusions added up each
         # step, the bodies stepped alike): rank 0's
         return {"format": portable.FORMAT, "particles": {k: every[k][order] for k in portable.PARTICLE_KEYS},
-                "counters": parts[0][1], "bodies": portable.body_arrays(self.solver)}
+                "counters": portable.counters(self.solver), "bodies": portable.body_arrays(self.solver)}
 
     def rows(self, rows: np.ndarray) -> "np.ndarray | None":
         """Rank 0: of ``rows`` (one a local id, as measure/cloud.py packs them), those of every rank's
